@@ -1,0 +1,311 @@
+//! Linear RGB float images and their files.
+//!
+//! Reading: OpenEXR and Radiance HDR are taken as linear; PNG/JPEG are sRGB-decoded to linear.
+//! Writing: `.exr` stores linear f32 RGB; `.png` stores tone-mapped 8-bit sRGB. Every write goes to
+//! a temporary file in the destination folder that is renamed over the target only when complete,
+//! so a failed or interrupted write never leaves a half-written image (DESIGN.md, bad input).
+
+use crate::color::{ToneMap, srgb_decode, to_srgb8};
+use glam::Vec3;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Errors of image reading and writing; every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: cannot decode image: {message}")]
+    Decode { path: PathBuf, message: String },
+    #[error("{path}: cannot encode image: {message}")]
+    Encode { path: PathBuf, message: String },
+    #[error(
+        "{path}: unsupported image format (expected .exr, .hdr or .png{})",
+        if *.for_writing { "" } else { ", .jpg" }
+    )]
+    UnsupportedFormat { path: PathBuf, for_writing: bool },
+    #[error("{path}: image has zero size ({width}×{height})")]
+    ZeroSized {
+        path: PathBuf,
+        width: u32,
+        height: u32,
+    },
+    #[error("{path}: image contains NaN or infinite values")]
+    NotFinite { path: PathBuf },
+}
+
+/// A linear Rec.709 RGB image, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<Vec3>,
+}
+
+/// How to turn linear radiance into an 8-bit image.
+#[derive(Clone, Copy, Debug)]
+pub struct LdrSettings {
+    pub exposure: f32,
+    pub tone: ToneMap,
+}
+
+impl Default for LdrSettings {
+    fn default() -> Self {
+        LdrSettings {
+            exposure: 1.0,
+            tone: ToneMap::Filmic,
+        }
+    }
+}
+
+impl Image {
+    pub fn new(width: u32, height: u32) -> Self {
+        Image {
+            width,
+            height,
+            data: vec![Vec3::ZERO; width as usize * height as usize],
+        }
+    }
+
+    pub fn from_fn(width: u32, height: u32, mut f: impl FnMut(u32, u32) -> Vec3) -> Self {
+        let mut img = Image::new(width, height);
+        for y in 0..height {
+            for x in 0..width {
+                img.data[(y * width + x) as usize] = f(x, y);
+            }
+        }
+        img
+    }
+
+    #[inline]
+    pub fn get(&self, x: u32, y: u32) -> Vec3 {
+        self.data[(y * self.width + x) as usize]
+    }
+
+    #[inline]
+    pub fn set(&mut self, x: u32, y: u32, v: Vec3) {
+        self.data[(y * self.width + x) as usize] = v;
+    }
+
+    /// Mean of all pixels.
+    pub fn mean(&self) -> Vec3 {
+        let s: glam::DVec3 = self.data.iter().map(|v| v.as_dvec3()).sum();
+        (s / self.data.len().max(1) as f64).as_vec3()
+    }
+
+    /// Read an image file: EXR/HDR (linear) or PNG/JPEG (sRGB, decoded to linear).
+    pub fn read(path: &Path) -> Result<Image, ImageError> {
+        let ext = extension(path);
+        let linear = match ext.as_str() {
+            "exr" | "hdr" => true,
+            "png" | "jpg" | "jpeg" => false,
+            _ => {
+                return Err(ImageError::UnsupportedFormat {
+                    path: path.into(),
+                    for_writing: false,
+                });
+            }
+        };
+        let reader = image::ImageReader::open(path).map_err(|e| ImageError::Io {
+            path: path.into(),
+            source: e,
+        })?;
+        let decoded = reader
+            .with_guessed_format()
+            .map_err(|e| ImageError::Io {
+                path: path.into(),
+                source: e,
+            })?
+            .decode()
+            .map_err(|e| ImageError::Decode {
+                path: path.into(),
+                message: e.to_string(),
+            })?;
+        let (w, h) = (decoded.width(), decoded.height());
+        if w == 0 || h == 0 {
+            return Err(ImageError::ZeroSized {
+                path: path.into(),
+                width: w,
+                height: h,
+            });
+        }
+        let rgb = decoded.to_rgb32f();
+        let data: Vec<Vec3> = rgb
+            .pixels()
+            .map(|p| {
+                let v = Vec3::new(p.0[0], p.0[1], p.0[2]);
+                if linear {
+                    v
+                } else {
+                    Vec3::new(srgb_decode(v.x), srgb_decode(v.y), srgb_decode(v.z))
+                }
+            })
+            .collect();
+        if data.iter().any(|v| !v.is_finite()) {
+            return Err(ImageError::NotFinite { path: path.into() });
+        }
+        Ok(Image {
+            width: w,
+            height: h,
+            data,
+        })
+    }
+
+    /// 8-bit sRGB bytes (RGB, row-major) after exposure and tone mapping.
+    pub fn to_srgb8(&self, ldr: LdrSettings) -> Vec<u8> {
+        self.data
+            .iter()
+            .flat_map(|&c| to_srgb8(c, ldr.exposure, ldr.tone))
+            .collect()
+    }
+
+    /// Write by extension: `.exr` (linear f32) or `.png` (tone-mapped sRGB), atomically.
+    pub fn write(&self, path: &Path, ldr: LdrSettings) -> Result<(), ImageError> {
+        let ext = extension(path);
+        let format = match ext.as_str() {
+            "exr" => image::ImageFormat::OpenExr,
+            "png" => image::ImageFormat::Png,
+            _ => {
+                return Err(ImageError::UnsupportedFormat {
+                    path: path.into(),
+                    for_writing: true,
+                });
+            }
+        };
+        let encode_err = |e: image::ImageError| ImageError::Encode {
+            path: path.into(),
+            message: e.to_string(),
+        };
+        write_atomic(path, |file| {
+            let mut w = BufWriter::new(file);
+            match format {
+                image::ImageFormat::OpenExr => {
+                    let flat: Vec<f32> = self.data.iter().flat_map(|v| v.to_array()).collect();
+                    let buf = image::Rgb32FImage::from_raw(self.width, self.height, flat)
+                        .expect("buffer size matches dimensions");
+                    image::DynamicImage::ImageRgb32F(buf)
+                        .write_to(&mut w, format)
+                        .map_err(encode_err)?;
+                }
+                _ => {
+                    let buf =
+                        image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(ldr))
+                            .expect("buffer size matches dimensions");
+                    image::DynamicImage::ImageRgb8(buf)
+                        .write_to(&mut w, format)
+                        .map_err(encode_err)?;
+                }
+            }
+            w.flush().map_err(|e| ImageError::Io {
+                path: path.into(),
+                source: e,
+            })?;
+            Ok(())
+        })
+    }
+}
+
+/// Lower-case extension of a path ("" when none).
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// Run `write` on a temporary file beside `path`, then rename it onto `path`. On any error the
+/// temporary file is removed and `path` is left untouched.
+pub fn write_atomic<E: From<ImageError>>(
+    path: &Path,
+    write: impl FnOnce(File) -> Result<(), E>,
+) -> Result<(), E> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "output".into());
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let io = |e: std::io::Error, p: &Path| ImageError::Io {
+        path: p.into(),
+        source: e,
+    };
+    let file = File::create(&tmp).map_err(|e| E::from(io(e, path)))?;
+    match write(file) {
+        Ok(()) => std::fs::rename(&tmp, path).map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            E::from(io(e, path))
+        }),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn gradient() -> Image {
+        Image::from_fn(7, 5, |x, y| Vec3::new(x as f32 * 0.3, y as f32 * 0.1, 2.5))
+    }
+
+    #[test]
+    fn exr_round_trip_is_exact() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.exr");
+        let img = gradient();
+        img.write(&p, LdrSettings::default()).unwrap();
+        let back = Image::read(&p).unwrap();
+        assert_eq!(back, img);
+        // No temporary files left behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn png_round_trip_within_quantisation() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.png");
+        let img = Image::from_fn(4, 4, |x, y| Vec3::splat((x + 4 * y) as f32 / 16.0));
+        img.write(
+            &p,
+            LdrSettings {
+                exposure: 1.0,
+                tone: ToneMap::Clamp,
+            },
+        )
+        .unwrap();
+        let back = Image::read(&p).unwrap();
+        for (a, b) in img.data.iter().zip(&back.data) {
+            assert!((*a - *b).abs().max_element() < 0.01, "{a} {b}");
+        }
+    }
+
+    #[test]
+    fn bad_files_give_named_errors_and_no_output() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bad.exr");
+        std::fs::write(&p, b"not an exr").unwrap();
+        let e = Image::read(&p).unwrap_err();
+        assert!(e.to_string().contains("bad.exr"), "{e}");
+        let e = Image::read(&dir.path().join("missing.png")).unwrap_err();
+        assert!(matches!(e, ImageError::Io { .. }));
+        let e = gradient()
+            .write(&dir.path().join("x.bmp"), LdrSettings::default())
+            .unwrap_err();
+        assert!(matches!(e, ImageError::UnsupportedFormat { .. }));
+        assert!(!dir.path().join("x.bmp").exists());
+        // Writing into a folder that does not exist fails and leaves nothing.
+        let e = gradient()
+            .write(&dir.path().join("no/such/dir.exr"), LdrSettings::default())
+            .unwrap_err();
+        assert!(matches!(e, ImageError::Io { .. }));
+    }
+}

@@ -1,0 +1,736 @@
+//! Built-in procedural scenes: no assets in the repository, each with a default camera.
+//!
+//! | name | what it exercises |
+//! |---|---|
+//! | `cornell` | the Cornell box as published by the Cornell Program of Computer Graphics |
+//! | `room` | an indoor room lit by sun and sky through a window; bounce light dominates |
+//! | `shadows` | floor, pillars and boxes (closed meshes) under several point and spot lights |
+//! | `bush` | ≈20,000 alpha-tested translucent leaf triangles on branches, lit by the sun |
+//! | `prt` | a ridged torus knot (≈86k triangles, deep self-occlusion) and a coarse copy, env-lit |
+//! | `spheres` | spheres and a torus of different materials under an environment map |
+
+pub mod geom;
+
+use crate::model::*;
+use geom::*;
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
+use lightlab_core::image::Image;
+use lightlab_core::sampling::{Rng, uniform_sphere};
+
+/// Names of the built-in scenes, in the order `lightlab scenes` lists them.
+pub const NAMES: [&str; 6] = ["cornell", "room", "shadows", "bush", "prt", "spheres"];
+
+/// One-line description of a built-in scene.
+pub fn describe(name: &str) -> Option<&'static str> {
+    Some(match name {
+        "cornell" => "Cornell box (published geometry and reflectances), ceiling area light",
+        "room" => "room lit by sun and sky through a window, with pillars; bounce light dominates",
+        "shadows" => "floor, pillars and boxes (closed meshes) under point and spot lights",
+        "bush" => "procedural bush of ~20k alpha-tested translucent leaf triangles, sunlit",
+        "prt" => "ridged torus knot (~86k tris) and a coarse copy on a plane, environment-lit",
+        "spheres" => "spheres and a torus with different materials under an environment map",
+        _ => return None,
+    })
+}
+
+/// Build a built-in scene by name.
+pub fn builtin(name: &str) -> Option<Scene> {
+    let mut s = match name {
+        "cornell" => cornell(),
+        "room" => room(),
+        "shadows" => shadows(),
+        "bush" => bush(),
+        "prt" => prt(),
+        "spheres" => spheres(),
+        _ => return None,
+    };
+    s.name = name.into();
+    for m in &mut s.meshes {
+        if m.tangents.is_empty() {
+            m.compute_tangents();
+        }
+    }
+    Some(s)
+}
+
+/// The Cornell box. Geometry: the measured data of the Cornell Program of Computer Graphics
+/// (graphics.cornell.edu/online/box/data.html), converted from millimetres to metres; the
+/// camera is theirs (35 mm lens on a 25 mm film: yfov = 2·atan(12.5/35) = 39.3°). Reflectances
+/// are the usual RGB reductions of the measured spectra (white 0.725/0.71/0.68, red
+/// 0.63/0.065/0.05, green 0.14/0.45/0.091) and the light emits radiance (17, 12, 4).
+fn cornell() -> Scene {
+    let mut s = Scene::default();
+    let mm = |x: f32, y: f32, z: f32| Vec3::new(x, y, z) * 0.001;
+    let white = s.add_material(Material::diffuse("white", Vec3::new(0.725, 0.71, 0.68)));
+    let red = s.add_material(Material::diffuse("red", Vec3::new(0.63, 0.065, 0.05)));
+    let green = s.add_material(Material::diffuse("green", Vec3::new(0.14, 0.45, 0.091)));
+    let light = s.add_material(Material {
+        name: "light".into(),
+        base_color: Vec4::new(0.78, 0.78, 0.78, 1.0),
+        specular: 0.0,
+        emissive: Vec3::new(1.0, 12.0 / 17.0, 4.0 / 17.0),
+        emissive_strength: 17.0,
+        ..Default::default()
+    });
+    let inside = mm(278.0, 274.4, 279.6);
+    let walls: [(&str, [Vec3; 4], usize); 5] = [
+        (
+            "floor",
+            [
+                mm(552.8, 0.0, 0.0),
+                mm(0.0, 0.0, 0.0),
+                mm(0.0, 0.0, 559.2),
+                mm(549.6, 0.0, 559.2),
+            ],
+            white,
+        ),
+        (
+            "ceiling",
+            [
+                mm(556.0, 548.8, 0.0),
+                mm(556.0, 548.8, 559.2),
+                mm(0.0, 548.8, 559.2),
+                mm(0.0, 548.8, 0.0),
+            ],
+            white,
+        ),
+        (
+            "back_wall",
+            [
+                mm(549.6, 0.0, 559.2),
+                mm(0.0, 0.0, 559.2),
+                mm(0.0, 548.8, 559.2),
+                mm(556.0, 548.8, 559.2),
+            ],
+            white,
+        ),
+        (
+            "right_wall",
+            [
+                mm(0.0, 0.0, 559.2),
+                mm(0.0, 0.0, 0.0),
+                mm(0.0, 548.8, 0.0),
+                mm(0.0, 548.8, 559.2),
+            ],
+            green,
+        ),
+        (
+            "left_wall",
+            [
+                mm(552.8, 0.0, 0.0),
+                mm(549.6, 0.0, 559.2),
+                mm(556.0, 548.8, 559.2),
+                mm(556.0, 548.8, 0.0),
+            ],
+            red,
+        ),
+    ];
+    for (name, p, mat) in walls {
+        s.add_mesh(quad_facing(name, p, inside, mat), Mat4::IDENTITY);
+    }
+    // The light sits 0.1 mm below the ceiling, facing down.
+    let lp = [
+        mm(343.0, 548.7, 227.0),
+        mm(343.0, 548.7, 332.0),
+        mm(213.0, 548.7, 332.0),
+        mm(213.0, 548.7, 227.0),
+    ];
+    s.add_mesh(quad_facing("light", lp, inside, light), Mat4::IDENTITY);
+    let short_top = [
+        mm(130.0, 165.0, 65.0),
+        mm(82.0, 165.0, 225.0),
+        mm(240.0, 165.0, 272.0),
+        mm(290.0, 165.0, 114.0),
+    ];
+    let tall_top = [
+        mm(423.0, 330.0, 247.0),
+        mm(265.0, 330.0, 296.0),
+        mm(314.0, 330.0, 456.0),
+        mm(472.0, 330.0, 406.0),
+    ];
+    for (name, top) in [("short_block", short_top), ("tall_block", tall_top)] {
+        let bottom = top.map(|p| Vec3::new(p.x, 0.0, p.z));
+        s.add_mesh(hexahedron(name, bottom, top, white), Mat4::IDENTITY);
+    }
+    s.cameras.push(Camera::look_at(
+        "cornell_camera",
+        mm(278.0, 273.0, -800.0),
+        mm(278.0, 273.0, 0.0),
+        Vec3::Y,
+        2.0 * (12.5f32 / 35.0).atan(),
+    ));
+    s
+}
+
+/// An equirectangular sky: a smooth gradient from `horizon` to `zenith` above and `ground` below,
+/// plus broad lobes (direction, colour, cosine exponent) for low-frequency structure.
+fn sky_env(
+    width: u32,
+    zenith: Vec3,
+    horizon: Vec3,
+    ground: Vec3,
+    lobes: &[(Vec3, Vec3, f32)],
+) -> Environment {
+    let height = width / 2;
+    let image = Image::from_fn(width, height, |x, y| {
+        let uv = Vec2::new(
+            (x as f32 + 0.5) / width as f32,
+            (y as f32 + 0.5) / height as f32,
+        );
+        let d = Environment::uv_to_dir(uv);
+        let mut c = if d.y >= 0.0 {
+            horizon.lerp(zenith, d.y.sqrt())
+        } else {
+            horizon.lerp(ground, (-d.y).sqrt().min(1.0) * 0.9 + 0.1)
+        };
+        for &(dir, col, k) in lobes {
+            c += col * d.dot(dir.normalize()).max(0.0).powf(k);
+        }
+        c
+    });
+    Environment {
+        image,
+        intensity: 1.0,
+    }
+}
+
+fn sun(direction: Vec3, irradiance: f32, color: Vec3) -> Light {
+    Light {
+        name: "sun".into(),
+        kind: LightKind::Directional {
+            angular_diameter: 0.0093,
+        },
+        color,
+        intensity: irradiance,
+        position: Vec3::ZERO,
+        direction: direction.normalize(),
+        range: None,
+    }
+}
+
+/// A 6 × 3 × 5 m room with 0.2 m thick closed walls, a window in the +X wall, two pillars, sun
+/// and sky. Most of the room sees only bounce light.
+fn room() -> Scene {
+    let mut s = Scene::default();
+    let wall = s.add_material(Material::diffuse("plaster", Vec3::splat(0.75)));
+    let floor = s.add_material(Material::diffuse("wood", Vec3::new(0.5, 0.35, 0.2)));
+    let ceiling = s.add_material(Material::diffuse("ceiling", Vec3::splat(0.8)));
+    let pillar = s.add_material(Material::diffuse("pillar", Vec3::new(0.45, 0.5, 0.6)));
+    let t = 0.2;
+    let (x0, x1, y1, z0, z1) = (-3.0, 3.0, 3.0, -2.5, 2.5);
+    let b = |name: &str, min: Vec3, max: Vec3, m| aabb_box(name, min, max, m);
+    let parts = [
+        b(
+            "floor",
+            Vec3::new(x0 - t, -t, z0 - t),
+            Vec3::new(x1 + t, 0.0, z1 + t),
+            floor,
+        ),
+        b(
+            "ceiling",
+            Vec3::new(x0 - t, y1, z0 - t),
+            Vec3::new(x1 + t, y1 + t, z1 + t),
+            ceiling,
+        ),
+        b(
+            "wall_west",
+            Vec3::new(x0 - t, 0.0, z0 - t),
+            Vec3::new(x0, y1, z1 + t),
+            wall,
+        ),
+        b(
+            "wall_north",
+            Vec3::new(x0, 0.0, z0 - t),
+            Vec3::new(x1, y1, z0),
+            wall,
+        ),
+        b(
+            "wall_south",
+            Vec3::new(x0, 0.0, z1),
+            Vec3::new(x1, y1, z1 + t),
+            wall,
+        ),
+        // The east wall, around a window opening y ∈ [0.8, 2.4], z ∈ [−1.2, 1.2].
+        b(
+            "wall_east_low",
+            Vec3::new(x1, 0.0, z0 - t),
+            Vec3::new(x1 + t, 0.8, z1 + t),
+            wall,
+        ),
+        b(
+            "wall_east_high",
+            Vec3::new(x1, 2.4, z0 - t),
+            Vec3::new(x1 + t, y1, z1 + t),
+            wall,
+        ),
+        b(
+            "wall_east_north",
+            Vec3::new(x1, 0.8, z0 - t),
+            Vec3::new(x1 + t, 2.4, -1.2),
+            wall,
+        ),
+        b(
+            "wall_east_south",
+            Vec3::new(x1, 0.8, 1.2),
+            Vec3::new(x1 + t, 2.4, z1 + t),
+            wall,
+        ),
+    ];
+    for p in parts {
+        s.add_mesh(p, Mat4::IDENTITY);
+    }
+    let pillar_mesh = s.add_mesh(
+        b(
+            "pillar",
+            Vec3::new(-0.2, 0.0, -0.2),
+            Vec3::new(0.2, y1, 0.2),
+            pillar,
+        ),
+        Mat4::from_translation(Vec3::new(0.9, 0.0, -1.1)),
+    );
+    s.instances.push(Instance {
+        name: "pillar_2".into(),
+        mesh: pillar_mesh,
+        transform: Mat4::from_translation(Vec3::new(0.9, 0.0, 1.1)),
+    });
+    s.lights.push(sun(
+        Vec3::new(-0.75, -0.55, -0.25),
+        8.0,
+        Vec3::new(1.0, 0.95, 0.85),
+    ));
+    s.environment = Some(sky_env(
+        256,
+        Vec3::new(0.25, 0.45, 0.9),
+        Vec3::new(0.7, 0.8, 0.95),
+        Vec3::new(0.25, 0.22, 0.18),
+        &[],
+    ));
+    s.cameras.push(Camera::look_at(
+        "room_camera",
+        Vec3::new(-2.6, 1.7, 2.2),
+        Vec3::new(1.5, 0.9, -0.8),
+        Vec3::Y,
+        60f32.to_radians(),
+    ));
+    s
+}
+
+/// A floor, four pillars, boxes and a sphere (closed meshes) under three point and two spot
+/// lights: the shadow-volume and shadow-map test scene.
+fn shadows() -> Scene {
+    let mut s = Scene::default();
+    let floor = s.add_material(Material::diffuse("floor", Vec3::splat(0.6)));
+    let stone = s.add_material(Material {
+        name: "stone".into(),
+        base_color: Vec4::new(0.7, 0.65, 0.55, 1.0),
+        roughness: 0.5,
+        specular: 0.5,
+        ..Default::default()
+    });
+    let painted = s.add_material(Material {
+        name: "painted".into(),
+        base_color: Vec4::new(0.2, 0.35, 0.7, 1.0),
+        roughness: 0.35,
+        specular: 1.0,
+        ..Default::default()
+    });
+    s.add_mesh(
+        aabb_box(
+            "floor",
+            Vec3::new(-7.0, -0.2, -7.0),
+            Vec3::new(7.0, 0.0, 7.0),
+            floor,
+        ),
+        Mat4::IDENTITY,
+    );
+    let pillar = s.add_mesh(
+        cylinder("pillar", 0.3, 2.5, 24, stone),
+        Mat4::from_translation(Vec3::new(-2.5, 0.0, -2.5)),
+    );
+    for (i, p) in [(2.5, -2.5), (-2.5, 2.5), (2.5, 2.5)].iter().enumerate() {
+        s.instances.push(Instance {
+            name: format!("pillar_{}", i + 2),
+            mesh: pillar,
+            transform: Mat4::from_translation(Vec3::new(p.0, 0.0, p.1)),
+        });
+    }
+    let cube = s.add_mesh(
+        aabb_box("box", Vec3::splat(-0.5), Vec3::splat(0.5), painted),
+        Mat4::from_scale_rotation_translation(
+            Vec3::new(1.2, 1.0, 1.2),
+            Quat::from_rotation_y(0.5),
+            Vec3::new(0.0, 0.5, 0.0),
+        ),
+    );
+    s.instances.push(Instance {
+        name: "box_2".into(),
+        mesh: cube,
+        transform: Mat4::from_scale_rotation_translation(
+            Vec3::new(0.6, 1.6, 0.6),
+            Quat::from_rotation_y(-0.3),
+            Vec3::new(1.4, 0.8, 1.2),
+        ),
+    });
+    s.instances.push(Instance {
+        name: "box_3".into(),
+        mesh: cube,
+        transform: Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.7),
+            Quat::from_rotation_y(0.9),
+            Vec3::new(-1.5, 0.35, 0.8),
+        ),
+    });
+    s.add_mesh(
+        sphere("ball", 0.5, 48, 24, stone),
+        Mat4::from_translation(Vec3::new(0.6, 0.5, -1.6)),
+    );
+    let point = |name: &str, pos: Vec3, color: Vec3, intensity: f32| Light {
+        name: name.into(),
+        kind: LightKind::Point,
+        color,
+        intensity,
+        position: pos,
+        direction: -Vec3::Y,
+        range: None,
+    };
+    s.lights.push(point(
+        "point_warm",
+        Vec3::new(-1.5, 3.2, -1.0),
+        Vec3::new(1.0, 0.8, 0.6),
+        6.0,
+    ));
+    s.lights.push(point(
+        "point_cool",
+        Vec3::new(2.0, 2.8, 0.5),
+        Vec3::new(0.6, 0.75, 1.0),
+        5.0,
+    ));
+    s.lights.push(point(
+        "point_white",
+        Vec3::new(0.0, 4.0, 2.8),
+        Vec3::ONE,
+        4.0,
+    ));
+    for (name, pos, target, color) in [
+        (
+            "spot_a",
+            Vec3::new(-4.0, 4.5, 3.0),
+            Vec3::new(-0.5, 0.0, 0.0),
+            Vec3::new(1.0, 0.95, 0.8),
+        ),
+        (
+            "spot_b",
+            Vec3::new(4.0, 5.0, -3.5),
+            Vec3::new(0.5, 0.0, 0.5),
+            Vec3::new(0.85, 1.0, 0.85),
+        ),
+    ] {
+        s.lights.push(Light {
+            name: name.into(),
+            kind: LightKind::Spot {
+                inner_cone: 0.3,
+                outer_cone: 0.45,
+            },
+            color,
+            intensity: 40.0,
+            position: pos,
+            direction: (target - pos).normalize(),
+            range: None,
+        });
+    }
+    s.cameras.push(Camera::look_at(
+        "shadows_camera",
+        Vec3::new(0.0, 6.0, 8.5),
+        Vec3::new(0.0, 0.6, 0.0),
+        Vec3::Y,
+        45f32.to_radians(),
+    ));
+    s
+}
+
+/// A procedural 64×64 leaf texture (linear RGBA): a pointed ellipse with a midrib; alpha 0
+/// outside the leaf for alpha testing.
+fn leaf_texture() -> Texture {
+    let n = 64u32;
+    let mut data = Vec::with_capacity((n * n) as usize);
+    for y in 0..n {
+        for x in 0..n {
+            let s = (x as f32 + 0.5) / n as f32 - 0.5;
+            let t = (y as f32 + 0.5) / n as f32;
+            let half_width = 0.42 * (std::f32::consts::PI * t).sin().powf(0.8);
+            let inside = s.abs() < half_width;
+            let rib = s.abs() < 0.03;
+            let vein = ((t * 14.0 - s.abs() * 10.0).fract() - 0.5).abs() < 0.06;
+            let c = if rib {
+                Vec3::new(0.22, 0.38, 0.08)
+            } else if vein {
+                Vec3::new(0.16, 0.34, 0.07)
+            } else {
+                Vec3::new(0.10, 0.30, 0.05)
+            };
+            data.push(c.extend(if inside { 1.0 } else { 0.0 }));
+        }
+    }
+    Texture {
+        name: "leaf".into(),
+        width: n,
+        height: n,
+        data,
+        srgb: true,
+    }
+}
+
+/// A bush of about 20,000 leaf triangles (10,000 alpha-tested, double-sided, translucent quads)
+/// on a trunk and branches, over a ground plane, lit by the sun and a dim sky.
+fn bush() -> Scene {
+    let mut s = Scene::default();
+    let ground = s.add_material(Material::diffuse("ground", Vec3::new(0.3, 0.28, 0.18)));
+    let bark = s.add_material(Material::diffuse("bark", Vec3::new(0.25, 0.17, 0.1)));
+    s.textures.push(leaf_texture());
+    let leaf = s.add_material(Material {
+        name: "leaf".into(),
+        base_color: Vec4::ONE,
+        base_color_texture: Some(TextureRef {
+            texture: 0,
+            uv_set: 0,
+        }),
+        roughness: 0.6,
+        specular: 0.3,
+        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+        double_sided: true,
+        transmission: 0.4,
+        ..Default::default()
+    });
+    s.add_mesh(
+        quad(
+            "ground",
+            [
+                Vec3::new(-5.0, 0.0, 5.0),
+                Vec3::new(5.0, 0.0, 5.0),
+                Vec3::new(5.0, 0.0, -5.0),
+                Vec3::new(-5.0, 0.0, -5.0),
+            ],
+            ground,
+        ),
+        Mat4::IDENTITY,
+    );
+    let mut rng = Rng::new(2011, 0);
+    let trunk_top = Vec3::new(0.0, 0.9, 0.0);
+    let branch_mesh = s.add_mesh(cylinder("trunk", 0.07, 0.9, 12, bark), Mat4::IDENTITY);
+    let crown_centre = Vec3::new(0.0, 1.45, 0.0);
+    let crown_radii = Vec3::new(0.95, 0.65, 0.95);
+    let mut tips = Vec::new();
+    for i in 0..14 {
+        // Branch tips spread over the upper crown.
+        let mut d = uniform_sphere(rng.next_vec2());
+        d.y = d.y.abs() * 0.8 + 0.1;
+        let tip = crown_centre + d.normalize() * crown_radii * 0.75;
+        let axis = tip - trunk_top;
+        let len = axis.length();
+        let rot = Quat::from_rotation_arc(Vec3::Y, axis / len);
+        // The branch mesh is the trunk cylinder (height 0.9, radius 0.07) rescaled.
+        s.instances.push(Instance {
+            name: format!("branch_{i}"),
+            mesh: branch_mesh,
+            transform: Mat4::from_scale_rotation_translation(
+                Vec3::new(0.35, len / 0.9, 0.35),
+                rot,
+                trunk_top,
+            ),
+        });
+        tips.push(tip);
+    }
+    // 10,000 leaves: 70 % clustered around branch tips, 30 % on the crown's outer shell.
+    let mut leaves = Mesh {
+        name: "leaves".into(),
+        material: leaf,
+        ..Default::default()
+    };
+    for i in 0..10_000 {
+        let centre = if i % 10 < 7 {
+            let tip = tips[i % tips.len()];
+            tip + uniform_sphere(rng.next_vec2()) * 0.35 * rng.next_f32().cbrt()
+        } else {
+            let d = uniform_sphere(rng.next_vec2());
+            crown_centre + d * crown_radii * (0.8 + 0.2 * rng.next_f32())
+        };
+        let normal = uniform_sphere(rng.next_vec2());
+        let (t, b) = lightlab_core::sampling::orthonormal_basis(normal);
+        let angle = rng.next_f32() * std::f32::consts::TAU;
+        let along = t * angle.cos() + b * angle.sin();
+        let across = normal.cross(along);
+        let (len, wid) = (0.13 + 0.04 * rng.next_f32(), 0.09);
+        let base = centre - along * len * 0.5;
+        let corners = [
+            base - across * wid * 0.5,
+            base + across * wid * 0.5,
+            base + across * wid * 0.5 + along * len,
+            base - across * wid * 0.5 + along * len,
+        ];
+        let first = leaves.positions.len() as u32;
+        let uvs = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ];
+        let n = (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .normalize();
+        for (p, uv) in corners.iter().zip(uvs) {
+            leaves.positions.push(*p);
+            leaves.normals.push(n);
+            leaves.uv0.push(uv);
+        }
+        leaves
+            .indices
+            .extend([first, first + 1, first + 2, first, first + 2, first + 3]);
+    }
+    s.add_mesh(leaves, Mat4::IDENTITY);
+    s.lights.push(sun(
+        Vec3::new(-0.4, -0.8, -0.45),
+        6.0,
+        Vec3::new(1.0, 0.96, 0.88),
+    ));
+    s.environment = Some(sky_env(
+        256,
+        Vec3::new(0.15, 0.25, 0.5),
+        Vec3::new(0.4, 0.45, 0.55),
+        Vec3::new(0.12, 0.1, 0.08),
+        &[],
+    ));
+    s.cameras.push(Camera::look_at(
+        "bush_camera",
+        Vec3::new(2.7, 1.5, 3.1),
+        Vec3::new(0.0, 1.05, 0.0),
+        Vec3::Y,
+        40f32.to_radians(),
+    ));
+    s
+}
+
+/// The PRT scene: a ridged (2,3) torus knot of ≈86k triangles and a coarse 3.6k-triangle
+/// re-tessellation of the same surface beside it, on a plane, under a low-frequency environment.
+fn prt() -> Scene {
+    let mut s = Scene::default();
+    let plane = s.add_material(Material::diffuse("plane", Vec3::splat(0.6)));
+    let body = s.add_material(Material::diffuse("knot", Vec3::new(0.75, 0.72, 0.68)));
+    s.add_mesh(
+        quad(
+            "plane",
+            [
+                Vec3::new(-4.0, 0.0, 4.0),
+                Vec3::new(4.0, 0.0, 4.0),
+                Vec3::new(4.0, 0.0, -4.0),
+                Vec3::new(-4.0, 0.0, -4.0),
+            ],
+            plane,
+        ),
+        Mat4::IDENTITY,
+    );
+    let knot =
+        |name: &str, nu, nv| ridged_torus_knot(name, 2.0, 3.0, 1.0, 0.22, 7.0, 0.35, nu, nv, body);
+    s.add_mesh(
+        knot("knot_high", 900, 48),
+        Mat4::from_translation(Vec3::new(-1.3, 0.72, 0.0)),
+    );
+    s.add_mesh(
+        knot("knot_low", 150, 12),
+        Mat4::from_translation(Vec3::new(1.3, 0.72, 0.0)),
+    );
+    s.environment = Some(sky_env(
+        128,
+        Vec3::new(0.3, 0.4, 0.6),
+        Vec3::new(0.5, 0.5, 0.5),
+        Vec3::new(0.15, 0.13, 0.1),
+        &[
+            (Vec3::new(0.6, 0.7, 0.4), Vec3::new(1.6, 1.2, 0.7), 4.0),
+            (Vec3::new(-0.7, 0.3, -0.5), Vec3::new(0.2, 0.35, 0.8), 2.0),
+        ],
+    ));
+    s.cameras.push(Camera::look_at(
+        "prt_camera",
+        Vec3::new(0.0, 2.4, 4.8),
+        Vec3::new(0.0, 0.6, 0.0),
+        Vec3::Y,
+        45f32.to_radians(),
+    ));
+    s
+}
+
+/// Spheres of diffuse, plastic and metal materials and a glossy torus under an environment map.
+fn spheres() -> Scene {
+    let mut s = Scene::default();
+    let ground = s.add_material(Material::diffuse("ground", Vec3::splat(0.5)));
+    let mats = [
+        Material::diffuse("diffuse_red", Vec3::new(0.7, 0.1, 0.08)),
+        Material {
+            name: "plastic_blue".into(),
+            base_color: Vec4::new(0.1, 0.2, 0.7, 1.0),
+            roughness: 0.25,
+            specular: 1.0,
+            ..Default::default()
+        },
+        Material {
+            name: "gold_rough".into(),
+            base_color: Vec4::new(1.0, 0.78, 0.34, 1.0),
+            metallic: 1.0,
+            roughness: 0.4,
+            ..Default::default()
+        },
+        Material {
+            name: "silver_polished".into(),
+            base_color: Vec4::new(0.95, 0.93, 0.88, 1.0),
+            metallic: 1.0,
+            roughness: 0.08,
+            ..Default::default()
+        },
+    ];
+    s.add_mesh(
+        quad(
+            "ground",
+            [
+                Vec3::new(-5.0, 0.0, 5.0),
+                Vec3::new(5.0, 0.0, 5.0),
+                Vec3::new(5.0, 0.0, -5.0),
+                Vec3::new(-5.0, 0.0, -5.0),
+            ],
+            ground,
+        ),
+        Mat4::IDENTITY,
+    );
+    for (i, m) in mats.into_iter().enumerate() {
+        let name = format!("sphere_{}", m.name);
+        let id = s.add_material(m);
+        s.add_mesh(
+            sphere(&name, 0.45, 64, 32, id),
+            Mat4::from_translation(Vec3::new(-1.65 + 1.1 * i as f32, 0.45, -0.3)),
+        );
+    }
+    let green = s.add_material(Material {
+        name: "plastic_green".into(),
+        base_color: Vec4::new(0.15, 0.5, 0.15, 1.0),
+        roughness: 0.45,
+        specular: 1.0,
+        ..Default::default()
+    });
+    s.add_mesh(
+        torus("torus", 0.35, 0.12, 64, 24, green),
+        Mat4::from_rotation_translation(Quat::from_rotation_x(0.4), Vec3::new(0.0, 0.3, 0.9)),
+    );
+    s.environment = Some(sky_env(
+        256,
+        Vec3::new(0.35, 0.5, 0.8),
+        Vec3::new(0.8, 0.8, 0.8),
+        Vec3::new(0.2, 0.18, 0.15),
+        &[(Vec3::new(0.5, 0.6, 0.6), Vec3::new(30.0, 27.0, 22.0), 400.0)],
+    ));
+    s.cameras.push(Camera::look_at(
+        "spheres_camera",
+        Vec3::new(0.0, 1.5, 4.3),
+        Vec3::new(0.0, 0.4, 0.0),
+        Vec3::Y,
+        40f32.to_radians(),
+    ));
+    s
+}

@@ -1,0 +1,774 @@
+//! glTF 2.0 import and export (`.gltf` with external or embedded buffers, and `.glb`).
+//!
+//! Import reads the default scene's node tree (world transforms composed), triangle primitives
+//! (POSITION, NORMAL, TANGENT, TEXCOORD_0/1, indices), metallic–roughness materials with
+//! KHR_materials_emissive_strength, KHR_materials_specular and
+//! KHR_materials_diffuse_transmission, textures, perspective cameras and KHR_lights_punctual.
+//!
+//! lightlab additions live in `extras` so other tools ignore them harmlessly:
+//! - a directional light's `extras.angularDiameter` (radians);
+//! - the scene's `extras.lightlab.environment = { uri, intensity }`, an equirectangular EXR/HDR
+//!   next to the glTF file (glTF has no ratified equirectangular environment extension).
+//!
+//! Export writes one binary blob (GLB chunk, or `<stem>.bin` beside a `.gltf`) holding all
+//! geometry and the textures as PNG, plus `<stem>.env.exr` when the scene has an environment.
+//! The JSON is written by hand with serde_json (rather than the gltf-json builder types) to keep
+//! full control of extensions and extras. All files are written atomically.
+
+use crate::model::*;
+use crate::{LoadOptions, SceneError};
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
+use lightlab_core::color::{srgb_decode, srgb_encode};
+use lightlab_core::image::{Image, LdrSettings, write_atomic};
+use serde_json::{Value, json};
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The extensions lightlab reads; files that *require* any other are rejected.
+pub const SUPPORTED_EXTENSIONS: [&str; 4] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_specular",
+    "KHR_materials_diffuse_transmission",
+];
+
+fn gltf_err(path: &Path, e: impl std::fmt::Display) -> SceneError {
+    SceneError::Gltf {
+        path: path.into(),
+        message: e.to_string(),
+    }
+}
+
+/// Import a `.gltf` or `.glb` file and validate it.
+pub fn import(path: &Path, opts: LoadOptions) -> Result<Scene, SceneError> {
+    let bytes = std::fs::read(path).map_err(|e| SceneError::Io {
+        path: path.into(),
+        source: e,
+    })?;
+    // Check required extensions on the raw JSON first, for a clearer message than the
+    // validator's.
+    check_required_extensions(path, &bytes)?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| gltf_err(path, e))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let gltf::Gltf { document, blob } = gltf;
+    let buffers = gltf::import_buffers(&document, Some(base), blob)
+        .map_err(|e| gltf_err(path, format!("buffer: {e}")))?;
+    let images = gltf::import_images(&document, Some(base), &buffers)
+        .map_err(|e| gltf_err(path, format!("image: {e}")))?;
+    let mut scene = Importer {
+        path,
+        doc: &document,
+        buffers: &buffers,
+        images: &images,
+        scene: Scene::default(),
+        mesh_map: HashMap::new(),
+        tex_map: HashMap::new(),
+    }
+    .run()?;
+    scene.name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    crate::validate::validate(&mut scene, path, opts)?;
+    Ok(scene)
+}
+
+fn check_required_extensions(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
+    let json_bytes: &[u8] = if bytes.starts_with(b"glTF") {
+        if bytes.len() < 20 {
+            return Err(gltf_err(path, "truncated GLB header"));
+        }
+        let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        bytes
+            .get(20..20 + len)
+            .ok_or_else(|| gltf_err(path, "truncated GLB JSON chunk"))?
+    } else {
+        bytes
+    };
+    let v: Value = serde_json::from_slice(json_bytes).map_err(|e| gltf_err(path, e))?;
+    if let Some(req) = v.get("extensionsRequired").and_then(|r| r.as_array()) {
+        for e in req.iter().filter_map(|e| e.as_str()) {
+            if !SUPPORTED_EXTENSIONS.contains(&e) {
+                return Err(SceneError::UnsupportedExtension {
+                    path: path.into(),
+                    extension: e.into(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+struct Importer<'a> {
+    path: &'a Path,
+    doc: &'a gltf::Document,
+    buffers: &'a [gltf::buffer::Data],
+    images: &'a [gltf::image::Data],
+    scene: Scene,
+    /// (glTF mesh, primitive) → lightlab mesh.
+    mesh_map: HashMap<(usize, usize), usize>,
+    /// (glTF image, sRGB) → lightlab texture.
+    tex_map: HashMap<(usize, bool), usize>,
+}
+
+fn extras_json(extras: &gltf::json::Extras) -> Option<Value> {
+    extras
+        .as_ref()
+        .and_then(|raw| serde_json::from_str(raw.get()).ok())
+}
+
+impl Importer<'_> {
+    fn run(mut self) -> Result<Scene, SceneError> {
+        for m in self.doc.materials() {
+            let mat = self.material(&m)?;
+            self.scene.materials.push(mat);
+        }
+        // Primitives without a material get a default one, appended at the end if used.
+        let default_material = self.scene.materials.len();
+        let gscene = self
+            .doc
+            .default_scene()
+            .or_else(|| self.doc.scenes().next())
+            .ok_or_else(|| gltf_err(self.path, "the file contains no scene"))?;
+        for node in gscene.nodes() {
+            self.node(&node, Mat4::IDENTITY, default_material)?;
+        }
+        if self
+            .scene
+            .meshes
+            .iter()
+            .any(|m| m.material == default_material)
+        {
+            self.scene.materials.push(Material {
+                name: "default".into(),
+                ..Default::default()
+            });
+        }
+        if let Some(env) = extras_json(gscene.extras())
+            .and_then(|v| v.get("lightlab")?.get("environment").cloned())
+        {
+            let uri = env
+                .get("uri")
+                .and_then(|u| u.as_str())
+                .ok_or_else(|| gltf_err(self.path, "extras.lightlab.environment has no uri"))?;
+            let file = self.path.parent().unwrap_or(Path::new(".")).join(uri);
+            let image = Image::read(&file)?;
+            let intensity = env.get("intensity").and_then(|v| v.as_f64()).unwrap_or(1.0) as f32;
+            self.scene.environment = Some(Environment { image, intensity });
+        }
+        Ok(self.scene)
+    }
+
+    fn texture(&mut self, tex: gltf::Texture, srgb: bool) -> Result<usize, SceneError> {
+        let img_index = tex.source().index();
+        if let Some(&t) = self.tex_map.get(&(img_index, srgb)) {
+            return Ok(t);
+        }
+        let img = &self.images[img_index];
+        let name = tex
+            .source()
+            .name()
+            .map(String::from)
+            .unwrap_or_else(|| format!("image{img_index}"));
+        let (w, h) = (img.width, img.height);
+        if w == 0 || h == 0 {
+            return Err(SceneError::Content {
+                path: self.path.into(),
+                what: format!("image '{name}'"),
+                problem: "has zero size".into(),
+            });
+        }
+        use gltf::image::Format as F;
+        let px = |i: usize| -> Vec4 {
+            let p = &img.pixels;
+            let b = |k: usize| p[k] as f32 / 255.0;
+            let s = |k: usize| u16::from_le_bytes([p[k], p[k + 1]]) as f32 / 65535.0;
+            let f = |k: usize| f32::from_le_bytes([p[k], p[k + 1], p[k + 2], p[k + 3]]);
+            match img.format {
+                F::R8 => Vec4::new(b(i), b(i), b(i), 1.0),
+                F::R8G8 => Vec4::new(b(2 * i), b(2 * i), b(2 * i), b(2 * i + 1)),
+                F::R8G8B8 => Vec4::new(b(3 * i), b(3 * i + 1), b(3 * i + 2), 1.0),
+                F::R8G8B8A8 => Vec4::new(b(4 * i), b(4 * i + 1), b(4 * i + 2), b(4 * i + 3)),
+                F::R16 => Vec4::new(s(2 * i), s(2 * i), s(2 * i), 1.0),
+                F::R16G16 => Vec4::new(s(4 * i), s(4 * i), s(4 * i), s(4 * i + 2)),
+                F::R16G16B16 => Vec4::new(s(6 * i), s(6 * i + 2), s(6 * i + 4), 1.0),
+                F::R16G16B16A16 => Vec4::new(s(8 * i), s(8 * i + 2), s(8 * i + 4), s(8 * i + 6)),
+                F::R32G32B32FLOAT => Vec4::new(f(12 * i), f(12 * i + 4), f(12 * i + 8), 1.0),
+                F::R32G32B32A32FLOAT => {
+                    Vec4::new(f(16 * i), f(16 * i + 4), f(16 * i + 8), f(16 * i + 12))
+                }
+            }
+        };
+        let data = (0..(w * h) as usize)
+            .map(|i| {
+                let v = px(i);
+                if srgb {
+                    Vec4::new(srgb_decode(v.x), srgb_decode(v.y), srgb_decode(v.z), v.w)
+                } else {
+                    v
+                }
+            })
+            .collect();
+        self.scene.textures.push(Texture {
+            name,
+            width: w,
+            height: h,
+            data,
+            srgb,
+        });
+        let id = self.scene.textures.len() - 1;
+        self.tex_map.insert((img_index, srgb), id);
+        Ok(id)
+    }
+
+    fn material(&mut self, m: &gltf::Material) -> Result<Material, SceneError> {
+        let pbr = m.pbr_metallic_roughness();
+        let mut tref = |info: Option<gltf::texture::Info>, srgb: bool| -> Result<_, SceneError> {
+            info.map(|i| {
+                Ok(TextureRef {
+                    texture: self.texture(i.texture(), srgb)?,
+                    uv_set: i.tex_coord(),
+                })
+            })
+            .transpose()
+        };
+        let base_color_texture = tref(pbr.base_color_texture(), true)?;
+        let metallic_roughness_texture = tref(pbr.metallic_roughness_texture(), false)?;
+        let emissive_texture = tref(m.emissive_texture(), true)?;
+        let (normal_texture, normal_scale) = match m.normal_texture() {
+            Some(n) => (
+                Some(TextureRef {
+                    texture: self.texture(n.texture(), false)?,
+                    uv_set: n.tex_coord(),
+                }),
+                n.scale(),
+            ),
+            None => (None, 1.0),
+        };
+        let transmission = m
+            .extension_value("KHR_materials_diffuse_transmission")
+            .and_then(|v| v.get("diffuseTransmissionFactor")?.as_f64())
+            .unwrap_or(0.0) as f32;
+        Ok(Material {
+            name: m.name().unwrap_or("material").into(),
+            base_color: Vec4::from_array(pbr.base_color_factor()),
+            base_color_texture,
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
+            metallic_roughness_texture,
+            specular: m.specular().map(|s| s.specular_factor()).unwrap_or(1.0),
+            emissive: Vec3::from_array(m.emissive_factor()),
+            emissive_strength: m.emissive_strength().unwrap_or(1.0),
+            emissive_texture,
+            normal_texture,
+            normal_scale,
+            alpha_mode: match m.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+                gltf::material::AlphaMode::Mask => AlphaMode::Mask {
+                    cutoff: m.alpha_cutoff().unwrap_or(0.5),
+                },
+                gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+            },
+            double_sided: m.double_sided(),
+            transmission,
+        })
+    }
+
+    fn node(
+        &mut self,
+        node: &gltf::Node,
+        parent: Mat4,
+        default_material: usize,
+    ) -> Result<(), SceneError> {
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let node_name = node
+            .name()
+            .map(String::from)
+            .unwrap_or_else(|| format!("node{}", node.index()));
+        if let Some(mesh) = node.mesh() {
+            for prim in mesh.primitives() {
+                let key = (mesh.index(), prim.index());
+                let id = match self.mesh_map.get(&key) {
+                    Some(&id) => id,
+                    None => {
+                        let m = self.primitive(&mesh, &prim, default_material)?;
+                        self.scene.meshes.push(m);
+                        let id = self.scene.meshes.len() - 1;
+                        self.mesh_map.insert(key, id);
+                        id
+                    }
+                };
+                self.scene.instances.push(Instance {
+                    name: node_name.clone(),
+                    mesh: id,
+                    transform: world,
+                });
+            }
+        }
+        // Cameras and lights use the node's rigid part (scale removed).
+        let (_, rot, pos) = world.to_scale_rotation_translation();
+        let rigid = Mat4::from_rotation_translation(rot.normalize(), pos);
+        if let Some(cam) = node.camera() {
+            match cam.projection() {
+                gltf::camera::Projection::Perspective(p) => self.scene.cameras.push(Camera {
+                    name: cam.name().map(String::from).unwrap_or(node_name.clone()),
+                    transform: rigid,
+                    yfov: p.yfov(),
+                    znear: p.znear(),
+                    zfar: p.zfar(),
+                }),
+                gltf::camera::Projection::Orthographic(_) => {
+                    // Orthographic cameras are not used by any lightlab technique; skipped.
+                }
+            }
+        }
+        if let Some(light) = node.light() {
+            use gltf::khr_lights_punctual::Kind;
+            let extras = extras_json(light.extras());
+            let kind = match light.kind() {
+                Kind::Point => LightKind::Point,
+                Kind::Spot {
+                    inner_cone_angle,
+                    outer_cone_angle,
+                } => LightKind::Spot {
+                    inner_cone: inner_cone_angle,
+                    outer_cone: outer_cone_angle,
+                },
+                Kind::Directional => LightKind::Directional {
+                    angular_diameter: extras
+                        .as_ref()
+                        .and_then(|e| e.get("angularDiameter")?.as_f64())
+                        .unwrap_or(0.0) as f32,
+                },
+            };
+            self.scene.lights.push(Light {
+                name: light.name().map(String::from).unwrap_or(node_name.clone()),
+                kind,
+                color: Vec3::from_array(light.color()),
+                intensity: light.intensity(),
+                position: pos,
+                direction: rigid.transform_vector3(-Vec3::Z).normalize(),
+                range: light.range(),
+            });
+        }
+        for child in node.children() {
+            self.node(&child, world, default_material)?;
+        }
+        Ok(())
+    }
+
+    fn primitive(
+        &self,
+        mesh: &gltf::Mesh,
+        prim: &gltf::Primitive,
+        default_material: usize,
+    ) -> Result<Mesh, SceneError> {
+        let name = match (mesh.name(), mesh.primitives().len()) {
+            (Some(n), 1) => n.to_string(),
+            (Some(n), _) => format!("{n}.{}", prim.index()),
+            (None, _) => format!("mesh{}.{}", mesh.index(), prim.index()),
+        };
+        let geo = |problem: &str| SceneError::Geometry {
+            path: self.path.into(),
+            mesh: name.clone(),
+            problem: problem.into(),
+        };
+        if prim.mode() != gltf::mesh::Mode::Triangles {
+            return Err(geo(&format!(
+                "primitive mode {:?} is not supported (only TRIANGLES)",
+                prim.mode()
+            )));
+        }
+        let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+        let positions: Vec<Vec3> = reader
+            .read_positions()
+            .ok_or_else(|| geo("has no POSITION attribute"))?
+            .map(Vec3::from_array)
+            .collect();
+        let normals = reader
+            .read_normals()
+            .map(|n| n.map(Vec3::from_array).collect())
+            .unwrap_or_default();
+        let tangents = reader
+            .read_tangents()
+            .map(|t| t.map(Vec4::from_array).collect())
+            .unwrap_or_default();
+        let uv0 = reader
+            .read_tex_coords(0)
+            .map(|t| t.into_f32().map(Vec2::from_array).collect())
+            .unwrap_or_default();
+        let uv1 = reader
+            .read_tex_coords(1)
+            .map(|t| t.into_f32().map(Vec2::from_array).collect());
+        let indices = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..positions.len() as u32).collect(),
+        };
+        Ok(Mesh {
+            name,
+            positions,
+            normals,
+            tangents,
+            uv0,
+            uv1,
+            indices,
+            material: prim.material().index().unwrap_or(default_material),
+        })
+    }
+}
+
+// ----------------------------------------------------------------------------------------------
+// Export
+
+/// Write `scene` as `.glb` or `.gltf` (by extension). See the module documentation.
+pub fn export(scene: &Scene, path: &Path) -> Result<(), SceneError> {
+    let ext = lightlab_core::image::extension(path);
+    if ext != "glb" && ext != "gltf" {
+        return Err(SceneError::Content {
+            path: path.into(),
+            what: "output".into(),
+            problem: "the file name must end in .glb or .gltf".into(),
+        });
+    }
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut w = Writer::default();
+    let env_uri = format!("{stem}.env.exr");
+    let mut root = w.document(
+        scene,
+        scene.environment.as_ref().map(|_| env_uri.as_str()),
+        path,
+    )?;
+    if let Some(env) = &scene.environment {
+        env.image
+            .write(&dir.join(&env_uri), LdrSettings::default())?;
+    }
+    let io = |e: std::io::Error| SceneError::Io {
+        path: path.into(),
+        source: e,
+    };
+    while w.bin.len() % 4 != 0 {
+        w.bin.push(0);
+    }
+    root["buffers"] = json!([{ "byteLength": w.bin.len() }]);
+    if ext == "glb" {
+        let mut json_bytes = serde_json::to_vec(&root).expect("serialisable");
+        while json_bytes.len() % 4 != 0 {
+            json_bytes.push(b' ');
+        }
+        let total = 12 + 8 + json_bytes.len() + 8 + w.bin.len();
+        write_atomic(path, |mut f| -> Result<(), SceneError> {
+            let mut out = Vec::with_capacity(total);
+            out.extend(b"glTF");
+            out.extend(2u32.to_le_bytes());
+            out.extend((total as u32).to_le_bytes());
+            out.extend((json_bytes.len() as u32).to_le_bytes());
+            out.extend(b"JSON");
+            out.extend(&json_bytes);
+            out.extend((w.bin.len() as u32).to_le_bytes());
+            out.extend(b"BIN\0");
+            out.extend(&w.bin);
+            f.write_all(&out).map_err(io)
+        })?;
+    } else {
+        let bin_uri = format!("{stem}.bin");
+        root["buffers"][0]["uri"] = json!(bin_uri);
+        write_atomic(&dir.join(&bin_uri), |mut f| -> Result<(), SceneError> {
+            f.write_all(&w.bin).map_err(io)
+        })?;
+        let text = serde_json::to_vec_pretty(&root).expect("serialisable");
+        write_atomic(path, |mut f| -> Result<(), SceneError> {
+            f.write_all(&text).map_err(io)
+        })?;
+    }
+    Ok(())
+}
+
+#[derive(Default)]
+struct Writer {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Writer {
+    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let mut v = json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() });
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.views.push(v);
+        self.views.len() - 1
+    }
+
+    fn floats(&mut self, data: &[f32], comps: usize, kind: &str, minmax: bool) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
+        let view = self.view(&bytes, Some(34962));
+        let count = data.len() / comps;
+        let mut a =
+            json!({ "bufferView": view, "componentType": 5126, "count": count, "type": kind });
+        if minmax {
+            let mut mn = vec![f32::INFINITY; comps];
+            let mut mx = vec![f32::NEG_INFINITY; comps];
+            for c in data.chunks_exact(comps) {
+                for k in 0..comps {
+                    mn[k] = mn[k].min(c[k]);
+                    mx[k] = mx[k].max(c[k]);
+                }
+            }
+            a["min"] = json!(mn);
+            a["max"] = json!(mx);
+        }
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+
+    fn document(
+        &mut self,
+        scene: &Scene,
+        env_uri: Option<&str>,
+        path: &Path,
+    ) -> Result<Value, SceneError> {
+        let mut used: Vec<&str> = vec![];
+        let use_ext = |e: &'static str, used: &mut Vec<&str>| {
+            if !used.contains(&e) {
+                used.push(e);
+            }
+        };
+        // Textures as PNG images in the binary blob.
+        let mut images = vec![];
+        for t in &scene.textures {
+            let rgba: Vec<u8> = t
+                .data
+                .iter()
+                .flat_map(|v| {
+                    let enc = |x: f32| {
+                        if t.srgb {
+                            srgb_encode(x)
+                        } else {
+                            x.clamp(0.0, 1.0)
+                        }
+                    };
+                    let q = |x: f32| (x * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8;
+                    [
+                        q(enc(v.x)),
+                        q(enc(v.y)),
+                        q(enc(v.z)),
+                        q(v.w.clamp(0.0, 1.0)),
+                    ]
+                })
+                .collect();
+            let mut png = vec![];
+            image::RgbaImage::from_raw(t.width, t.height, rgba)
+                .expect("size matches")
+                .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+                .map_err(|e| SceneError::Content {
+                    path: path.into(),
+                    what: format!("texture '{}'", t.name),
+                    problem: e.to_string(),
+                })?;
+            let view = self.view(&png, None);
+            images.push(json!({ "name": t.name, "bufferView": view, "mimeType": "image/png" }));
+        }
+        let textures: Vec<Value> = (0..scene.textures.len())
+            .map(|i| json!({ "source": i, "sampler": 0 }))
+            .collect();
+        let tinfo = |r: &TextureRef| json!({ "index": r.texture, "texCoord": r.uv_set });
+        let mut materials = vec![];
+        for m in &scene.materials {
+            let mut pbr = json!({
+                "baseColorFactor": m.base_color.to_array(),
+                "metallicFactor": m.metallic,
+                "roughnessFactor": m.roughness,
+            });
+            if let Some(r) = &m.base_color_texture {
+                pbr["baseColorTexture"] = tinfo(r);
+            }
+            if let Some(r) = &m.metallic_roughness_texture {
+                pbr["metallicRoughnessTexture"] = tinfo(r);
+            }
+            let mut v = json!({ "name": m.name, "pbrMetallicRoughness": pbr, "doubleSided": m.double_sided });
+            // glTF requires emissiveFactor ≤ 1: fold any excess into emissive_strength.
+            let peak = m.emissive.max_element();
+            let (factor, strength) = if peak > 1.0 {
+                (m.emissive / peak, m.emissive_strength * peak)
+            } else {
+                (m.emissive, m.emissive_strength)
+            };
+            v["emissiveFactor"] = json!(factor.to_array());
+            if let Some(r) = &m.emissive_texture {
+                v["emissiveTexture"] = tinfo(r);
+            }
+            if let Some(r) = &m.normal_texture {
+                v["normalTexture"] =
+                    json!({ "index": r.texture, "texCoord": r.uv_set, "scale": m.normal_scale });
+            }
+            match m.alpha_mode {
+                AlphaMode::Opaque => {}
+                AlphaMode::Mask { cutoff } => {
+                    v["alphaMode"] = json!("MASK");
+                    v["alphaCutoff"] = json!(cutoff);
+                }
+                AlphaMode::Blend => v["alphaMode"] = json!("BLEND"),
+            }
+            let mut exts = serde_json::Map::new();
+            if strength != 1.0 {
+                use_ext("KHR_materials_emissive_strength", &mut used);
+                exts.insert(
+                    "KHR_materials_emissive_strength".into(),
+                    json!({ "emissiveStrength": strength }),
+                );
+            }
+            if m.specular != 1.0 {
+                use_ext("KHR_materials_specular", &mut used);
+                exts.insert(
+                    "KHR_materials_specular".into(),
+                    json!({ "specularFactor": m.specular }),
+                );
+            }
+            if m.transmission != 0.0 {
+                use_ext("KHR_materials_diffuse_transmission", &mut used);
+                exts.insert(
+                    "KHR_materials_diffuse_transmission".into(),
+                    json!({ "diffuseTransmissionFactor": m.transmission }),
+                );
+            }
+            if !exts.is_empty() {
+                v["extensions"] = Value::Object(exts);
+            }
+            materials.push(v);
+        }
+        let mut meshes = vec![];
+        for m in &scene.meshes {
+            let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
+            let mut attrs = serde_json::Map::new();
+            attrs.insert(
+                "POSITION".into(),
+                json!(self.floats(&flat(&m.positions), 3, "VEC3", true)),
+            );
+            if !m.normals.is_empty() {
+                attrs.insert(
+                    "NORMAL".into(),
+                    json!(self.floats(&flat(&m.normals), 3, "VEC3", false)),
+                );
+            }
+            if !m.tangents.is_empty() {
+                let t: Vec<f32> = m.tangents.iter().flat_map(|t| t.to_array()).collect();
+                attrs.insert("TANGENT".into(), json!(self.floats(&t, 4, "VEC4", false)));
+            }
+            let uvs = |v: &[Vec2]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
+            if !m.uv0.is_empty() {
+                attrs.insert(
+                    "TEXCOORD_0".into(),
+                    json!(self.floats(&uvs(&m.uv0), 2, "VEC2", false)),
+                );
+            }
+            if let Some(uv1) = &m.uv1 {
+                attrs.insert(
+                    "TEXCOORD_1".into(),
+                    json!(self.floats(&uvs(uv1), 2, "VEC2", false)),
+                );
+            }
+            let idx: Vec<u8> = m.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+            let view = self.view(&idx, Some(34963));
+            self.accessors.push(json!({
+                "bufferView": view, "componentType": 5125, "count": m.indices.len(), "type": "SCALAR"
+            }));
+            let indices = self.accessors.len() - 1;
+            meshes.push(json!({
+                "name": m.name,
+                "primitives": [{ "attributes": attrs, "indices": indices, "material": m.material, "mode": 4 }]
+            }));
+        }
+        let mut nodes = vec![];
+        for inst in &scene.instances {
+            nodes.push(json!({ "name": inst.name, "mesh": inst.mesh, "matrix": inst.transform.to_cols_array() }));
+        }
+        let mut cameras = vec![];
+        for (i, c) in scene.cameras.iter().enumerate() {
+            let mut persp = json!({ "yfov": c.yfov, "znear": c.znear });
+            if let Some(f) = c.zfar {
+                persp["zfar"] = json!(f);
+            }
+            cameras.push(json!({ "name": c.name, "type": "perspective", "perspective": persp }));
+            nodes.push(
+                json!({ "name": c.name, "camera": i, "matrix": c.transform.to_cols_array() }),
+            );
+        }
+        let mut lights = vec![];
+        for (i, l) in scene.lights.iter().enumerate() {
+            let mut v =
+                json!({ "name": l.name, "color": l.color.to_array(), "intensity": l.intensity });
+            match l.kind {
+                LightKind::Point => v["type"] = json!("point"),
+                LightKind::Spot {
+                    inner_cone,
+                    outer_cone,
+                } => {
+                    v["type"] = json!("spot");
+                    v["spot"] =
+                        json!({ "innerConeAngle": inner_cone, "outerConeAngle": outer_cone });
+                }
+                LightKind::Directional { angular_diameter } => {
+                    v["type"] = json!("directional");
+                    v["extras"] = json!({ "angularDiameter": angular_diameter });
+                }
+            }
+            if let Some(r) = l.range {
+                v["range"] = json!(r);
+            }
+            lights.push(v);
+            let rot = Quat::from_rotation_arc(-Vec3::Z, l.direction.normalize());
+            let m = Mat4::from_rotation_translation(rot, l.position);
+            nodes.push(json!({
+                "name": l.name, "matrix": m.to_cols_array(),
+                "extensions": { "KHR_lights_punctual": { "light": i } }
+            }));
+        }
+        if !lights.is_empty() {
+            use_ext("KHR_lights_punctual", &mut used);
+        }
+        let mut gscene =
+            json!({ "name": scene.name, "nodes": (0..nodes.len()).collect::<Vec<_>>() });
+        if let (Some(uri), Some(env)) = (env_uri, &scene.environment) {
+            gscene["extras"] = json!({ "lightlab": { "environment": { "uri": uri, "intensity": env.intensity } } });
+        }
+        let mut root = json!({
+            "asset": { "version": "2.0", "generator": concat!("lightlab ", env!("CARGO_PKG_VERSION")) },
+            "scene": 0,
+            "scenes": [gscene],
+            "nodes": nodes,
+            "meshes": meshes,
+            "materials": materials,
+            "accessors": self.accessors,
+            "bufferViews": self.views,
+        });
+        if !cameras.is_empty() {
+            root["cameras"] = json!(cameras);
+        }
+        if !images.is_empty() {
+            root["images"] = json!(images);
+            root["textures"] = json!(textures);
+            root["samplers"] =
+                json!([{ "magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497 }]);
+        }
+        if !lights.is_empty() {
+            root["extensions"] = json!({ "KHR_lights_punctual": { "lights": lights } });
+        }
+        if !used.is_empty() {
+            root["extensionsUsed"] = json!(used);
+        }
+        Ok(root)
+    }
+}

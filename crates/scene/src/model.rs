@@ -1,0 +1,474 @@
+//! The scene model: what a glTF file loads into and what every baker and renderer reads.
+//!
+//! Units and conventions (DESIGN.md): right-handed, Y-up, metres. Colours are linear Rec.709.
+//! Light intensities follow KHR_lights_punctual numerically (point/spot in candela, directional in
+//! lux) but are used as radiometric quantities (W/sr, W/m²) with no luminous-efficacy factor,
+//! as most renderers do; emission is `emissive × emissive_strength` in W/(m²·sr).
+
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use lightlab_core::image::Image;
+
+/// A complete scene.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    pub name: String,
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub instances: Vec<Instance>,
+    pub lights: Vec<Light>,
+    pub environment: Option<Environment>,
+    /// The first camera is the scene's default camera.
+    pub cameras: Vec<Camera>,
+}
+
+/// An indexed triangle mesh with one material (a glTF primitive).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    /// xyz tangent and w = handedness (glTF convention); empty when the mesh has none.
+    pub tangents: Vec<Vec4>,
+    pub uv0: Vec<Vec2>,
+    /// Light-map UVs (TEXCOORD_1), when present.
+    pub uv1: Option<Vec<Vec2>>,
+    pub indices: Vec<u32>,
+    pub material: usize,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Compute per-vertex normals as the area-weighted average of face normals.
+    pub fn compute_normals(&mut self) {
+        let mut n = vec![Vec3::ZERO; self.positions.len()];
+        for t in self.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
+            let f = (b - a).cross(c - a);
+            for &i in t {
+                n[i as usize] += f;
+            }
+        }
+        self.normals = n.into_iter().map(|v| v.normalize_or(Vec3::Y)).collect();
+    }
+
+    /// Compute tangents from UV0 (per-triangle UV gradients, accumulated and orthonormalised
+    /// against the normal; w = handedness). Vertices without a UV gradient get any orthogonal
+    /// tangent.
+    pub fn compute_tangents(&mut self) {
+        let nv = self.positions.len();
+        let mut t = vec![Vec3::ZERO; nv];
+        let mut b = vec![Vec3::ZERO; nv];
+        if self.uv0.len() == nv {
+            for tri in self.indices.chunks_exact(3) {
+                let [i0, i1, i2] = [tri[0], tri[1], tri[2]].map(|i| i as usize);
+                let (p0, p1, p2) = (self.positions[i0], self.positions[i1], self.positions[i2]);
+                let (w0, w1, w2) = (self.uv0[i0], self.uv0[i1], self.uv0[i2]);
+                let (e1, e2) = (p1 - p0, p2 - p0);
+                let (d1, d2) = (w1 - w0, w2 - w0);
+                let det = d1.x * d2.y - d2.x * d1.y;
+                if det.abs() < 1e-20 {
+                    continue;
+                }
+                let r = 1.0 / det;
+                let sdir = (e1 * d2.y - e2 * d1.y) * r;
+                let tdir = (e2 * d1.x - e1 * d2.x) * r;
+                for i in [i0, i1, i2] {
+                    t[i] += sdir;
+                    b[i] += tdir;
+                }
+            }
+        }
+        self.tangents = (0..nv)
+            .map(|i| {
+                let n = self.normals.get(i).copied().unwrap_or(Vec3::Y);
+                let tt = t[i] - n * n.dot(t[i]);
+                let tt = if tt.length_squared() > 1e-20 {
+                    tt.normalize()
+                } else {
+                    lightlab_core::sampling::orthonormal_basis(n).0
+                };
+                let w = if n.cross(tt).dot(b[i]) < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                };
+                tt.extend(w)
+            })
+            .collect();
+    }
+}
+
+/// A placement of a mesh in the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    pub name: String,
+    pub mesh: usize,
+    /// World-from-object transform.
+    pub transform: Mat4,
+}
+
+impl Instance {
+    /// The matrix that transforms normals (inverse transpose of the upper 3×3).
+    pub fn normal_matrix(&self) -> Mat3 {
+        Mat3::from_mat4(self.transform).inverse().transpose()
+    }
+}
+
+/// How alpha is interpreted (glTF `alphaMode`).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum AlphaMode {
+    #[default]
+    Opaque,
+    /// Alpha-tested: texels with alpha < cutoff are holes.
+    Mask { cutoff: f32 },
+    /// Blended. The CPU reference treats it as stochastic coverage.
+    Blend,
+}
+
+/// A reference to a texture with the UV set it uses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    pub texture: usize,
+    /// 0 = TEXCOORD_0, 1 = TEXCOORD_1.
+    pub uv_set: u32,
+}
+
+/// A material: glTF metallic–roughness plus the extensions lightlab uses.
+///
+/// The BRDF is Lambert (`(1−metallic)·base/π`, scaled by 1−F for energy balance when a specular
+/// lobe exists) plus a GGX/Smith microfacet lobe with Schlick Fresnel,
+/// F0 = mix(0.04·specular, base, metallic). `specular = 0`, `metallic = 0` is pure Lambert.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Linear RGB and alpha.
+    pub base_color: Vec4,
+    pub base_color_texture: Option<TextureRef>,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// glTF metallicRoughness texture (G = roughness, B = metallic).
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// KHR_materials_specular `specularFactor` (scales the dielectric F0 = 0.04).
+    pub specular: f32,
+    pub emissive: Vec3,
+    /// KHR_materials_emissive_strength.
+    pub emissive_strength: f32,
+    pub emissive_texture: Option<TextureRef>,
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
+    pub alpha_mode: AlphaMode,
+    pub double_sided: bool,
+    /// KHR_materials_diffuse_transmission `diffuseTransmissionFactor`: the fraction of diffusely
+    /// scattered light that leaves through the back side (thin foliage).
+    pub transmission: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: String::new(),
+            base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
+            base_color_texture: None,
+            metallic: 0.0,
+            roughness: 1.0,
+            metallic_roughness_texture: None,
+            specular: 1.0,
+            emissive: Vec3::ZERO,
+            emissive_strength: 1.0,
+            emissive_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+            transmission: 0.0,
+        }
+    }
+}
+
+impl Material {
+    /// A pure Lambertian material of the given reflectance.
+    pub fn diffuse(name: &str, albedo: Vec3) -> Self {
+        Material {
+            name: name.into(),
+            base_color: albedo.extend(1.0),
+            specular: 0.0,
+            ..Default::default()
+        }
+    }
+
+    /// Emitted radiance (before any emissive texture).
+    pub fn emission(&self) -> Vec3 {
+        self.emissive * self.emissive_strength
+    }
+
+    pub fn is_emissive(&self) -> bool {
+        self.emission().max_element() > 0.0
+    }
+}
+
+/// A texture in linear float RGBA (sRGB textures are decoded on load).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<Vec4>,
+    /// Whether the source encoding was sRGB (base colour, emissive) or linear (normal, data).
+    pub srgb: bool,
+}
+
+impl Texture {
+    /// Bilinear lookup with repeat wrapping; `uv` in glTF convention (v down).
+    pub fn sample(&self, uv: Vec2) -> Vec4 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = uv.y * self.height as f32 - 0.5;
+        if !x.is_finite() || !y.is_finite() {
+            return self.data[0];
+        }
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let at = |xi: i64, yi: i64| {
+            let xi = xi.rem_euclid(w) as usize;
+            let yi = yi.rem_euclid(h) as usize;
+            self.data[yi * w as usize + xi]
+        };
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let top = at(x0, y0).lerp(at(x0 + 1, y0), fx);
+        let bottom = at(x0, y0 + 1).lerp(at(x0 + 1, y0 + 1), fx);
+        top.lerp(bottom, fy)
+    }
+}
+
+/// Kinds of punctual light (KHR_lights_punctual), plus the sun's angular size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    Point,
+    /// Cone angles in radians from the axis, as glTF (inner < outer ≤ π/2).
+    Spot {
+        inner_cone: f32,
+        outer_cone: f32,
+    },
+    /// A distant light; `angular_diameter` in radians (0 = a delta direction). The sun is
+    /// ≈ 0.0093 rad (0.53°).
+    Directional {
+        angular_diameter: f32,
+    },
+}
+
+/// A light in world space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    pub name: String,
+    pub kind: LightKind,
+    /// Linear RGB colour (multiplied by intensity).
+    pub color: Vec3,
+    /// Point/spot: radiant intensity (glTF candela); directional: irradiance (glTF lux).
+    pub intensity: f32,
+    pub position: Vec3,
+    /// The direction the light travels (spot axis; for a directional light, from the sun to the
+    /// scene). Unit length.
+    pub direction: Vec3,
+    /// glTF range: the distance beyond which the light is cut off (None = infinite).
+    pub range: Option<f32>,
+}
+
+impl Light {
+    /// Spot-cone falloff as KHR_lights_punctual recommends (smooth between outer and inner).
+    pub fn spot_factor(&self, dir_to_point: Vec3) -> f32 {
+        match self.kind {
+            LightKind::Spot {
+                inner_cone,
+                outer_cone,
+            } => {
+                let cd = self.direction.dot(dir_to_point);
+                let (ci, co) = (inner_cone.cos(), outer_cone.cos());
+                let scale = 1.0 / (ci - co).max(1e-4);
+                let t = ((cd - co) * scale).clamp(0.0, 1.0);
+                t * t
+            }
+            _ => 1.0,
+        }
+    }
+}
+
+/// An environment map: an equirectangular (latitude–longitude) radiance image.
+///
+/// Mapping (shared with `lightlab_core`'s parameterisations): for a world direction d,
+/// u = 0.5 + atan2(d.x, −d.z)/(2π), v = acos(d.y)/π; v = 0 is the zenith (+Y), u = 0.5 looks
+/// down −Z.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Environment {
+    pub image: Image,
+    /// Multiplier on the image.
+    pub intensity: f32,
+}
+
+impl Environment {
+    /// Direction → equirectangular uv in [0,1)².
+    pub fn dir_to_uv(d: Vec3) -> Vec2 {
+        let u = 0.5 + d.x.atan2(-d.z) / (2.0 * std::f32::consts::PI);
+        let v = d.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+        Vec2::new(u.rem_euclid(1.0), v)
+    }
+
+    /// Equirectangular uv → unit direction.
+    pub fn uv_to_dir(uv: Vec2) -> Vec3 {
+        let phi = (uv.x - 0.5) * 2.0 * std::f32::consts::PI;
+        let theta = uv.y * std::f32::consts::PI;
+        let s = theta.sin();
+        Vec3::new(s * phi.sin(), theta.cos(), -s * phi.cos())
+    }
+
+    /// Radiance arriving from direction `d` (nearest texel; the map is assumed smooth or
+    /// sampled with matching importance).
+    pub fn radiance(&self, d: Vec3) -> Vec3 {
+        let uv = Self::dir_to_uv(d);
+        let x = ((uv.x * self.image.width as f32) as u32).min(self.image.width - 1);
+        let y = ((uv.y * self.image.height as f32) as u32).min(self.image.height - 1);
+        self.image.get(x, y) * self.intensity
+    }
+}
+
+/// A perspective camera (glTF convention: looks down its local −Z, +Y up).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub name: String,
+    /// World-from-camera transform (rigid).
+    pub transform: Mat4,
+    /// Vertical field of view in radians.
+    pub yfov: f32,
+    pub znear: f32,
+    pub zfar: Option<f32>,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target`.
+    pub fn look_at(name: &str, eye: Vec3, target: Vec3, up: Vec3, yfov: f32) -> Camera {
+        Camera {
+            name: name.into(),
+            transform: {
+                let f = (target - eye).normalize();
+                let r = f.cross(up).normalize();
+                let u = r.cross(f);
+                Mat4::from_cols(
+                    r.extend(0.0),
+                    u.extend(0.0),
+                    (-f).extend(0.0),
+                    eye.extend(1.0),
+                )
+            },
+            yfov,
+            znear: 0.01,
+            zfar: None,
+        }
+    }
+
+    pub fn position(&self) -> Vec3 {
+        self.transform.w_axis.truncate()
+    }
+
+    /// Primary ray direction through normalised film position `ndc` ∈ [−1,1]² (y up), for an
+    /// image of aspect ratio width/height.
+    pub fn ray_direction(&self, ndc: Vec2, aspect: f32) -> Vec3 {
+        let t = (self.yfov * 0.5).tan();
+        let local = Vec3::new(ndc.x * t * aspect, ndc.y * t, -1.0);
+        self.transform.transform_vector3(local).normalize()
+    }
+}
+
+impl Scene {
+    pub fn default_camera(&self) -> Option<&Camera> {
+        self.cameras.first()
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.instances
+            .iter()
+            .map(|i| self.meshes[i.mesh].triangle_count())
+            .sum()
+    }
+
+    /// Append a mesh and one instance of it; returns the mesh index.
+    pub fn add_mesh(&mut self, mesh: Mesh, transform: Mat4) -> usize {
+        let id = self.meshes.len();
+        self.instances.push(Instance {
+            name: mesh.name.clone(),
+            mesh: id,
+            transform,
+        });
+        self.meshes.push(mesh);
+        id
+    }
+
+    pub fn add_material(&mut self, m: Material) -> usize {
+        self.materials.push(m);
+        self.materials.len() - 1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equirect_round_trip_and_axes() {
+        for d in [
+            Vec3::new(0.3, 0.5, -0.8).normalize(),
+            Vec3::new(-0.9, -0.1, 0.2).normalize(),
+            Vec3::new(0.0, 0.2, 1.0).normalize(),
+        ] {
+            let back = Environment::uv_to_dir(Environment::dir_to_uv(d));
+            assert!((back - d).length() < 1e-5, "{d} {back}");
+        }
+        assert!((Environment::dir_to_uv(Vec3::Y).y).abs() < 1e-6);
+        let f = Environment::dir_to_uv(-Vec3::Z);
+        assert!((f - Vec2::new(0.5, 0.5)).length() < 1e-6);
+    }
+
+    #[test]
+    fn camera_looks_at_target() {
+        let c = Camera::look_at("c", Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y, 0.8);
+        let d = c.ray_direction(Vec2::ZERO, 1.5);
+        assert!((d - (-Vec3::new(1.0, 2.0, 3.0)).normalize()).length() < 1e-5);
+        // +ndc.y goes up in the world.
+        assert!(c.ray_direction(Vec2::new(0.0, 1.0), 1.0).y > d.y);
+    }
+
+    #[test]
+    fn tangents_follow_uv_u() {
+        let mut m = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Z],
+            normals: vec![Vec3::Y; 3],
+            uv0: vec![Vec2::ZERO, Vec2::X, Vec2::Y],
+            indices: vec![0, 2, 1],
+            ..Default::default()
+        };
+        m.compute_tangents();
+        assert!((m.tangents[0].truncate() - Vec3::X).length() < 1e-6);
+        // bitangent = w·(n × t) = w·(Y × X) = −w·Z, and it must follow +v = +Z.
+        assert_eq!(m.tangents[0].w, -1.0);
+    }
+
+    #[test]
+    fn spot_falloff() {
+        let l = Light {
+            name: "s".into(),
+            kind: LightKind::Spot {
+                inner_cone: 0.2,
+                outer_cone: 0.4,
+            },
+            color: Vec3::ONE,
+            intensity: 1.0,
+            position: Vec3::ZERO,
+            direction: -Vec3::Y,
+            range: None,
+        };
+        assert_eq!(l.spot_factor(-Vec3::Y), 1.0);
+        assert_eq!(l.spot_factor(Vec3::X), 0.0);
+    }
+}

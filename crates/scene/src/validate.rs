@@ -1,0 +1,229 @@
+//! Scene checks: every problem becomes a [`SceneError`] naming the file and the mesh.
+//!
+//! Checked: finite positions/normals/UVs/transforms, index bounds, index count a multiple of
+//! three, attribute lengths, zero-area triangles (an error unless
+//! [`LoadOptions::drop_degenerate`](crate::LoadOptions) is set, then they are removed), material
+//! and texture references, light parameters, camera field of view.
+//!
+//! Meshes without normals get flat-shaded normals (the glTF specification requires exactly
+//! this), and meshes without UV0 get zeros unless a material texture needs them (then it is an
+//! error).
+
+use crate::{LoadOptions, Scene, SceneError, model::LightKind};
+use std::path::Path;
+
+/// Validate (and where allowed, repair) a scene loaded from `path`.
+pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(), SceneError> {
+    let geo = |mesh: &str, problem: String| SceneError::Geometry {
+        path: path.into(),
+        mesh: mesh.into(),
+        problem,
+    };
+    let content = |what: String, problem: String| SceneError::Content {
+        path: path.into(),
+        what,
+        problem,
+    };
+    let nmat = scene.materials.len();
+    let ntex = scene.textures.len();
+    for t in &scene.textures {
+        if t.width == 0 || t.height == 0 || t.data.len() != (t.width * t.height) as usize {
+            return Err(content(
+                format!("texture '{}'", t.name),
+                format!("zero-sized or inconsistent ({}×{})", t.width, t.height),
+            ));
+        }
+    }
+    for m in &scene.materials {
+        let refs = [
+            m.base_color_texture,
+            m.metallic_roughness_texture,
+            m.emissive_texture,
+            m.normal_texture,
+        ];
+        if refs.iter().flatten().any(|r| r.texture >= ntex) {
+            return Err(content(
+                format!("material '{}'", m.name),
+                "references a texture that does not exist".into(),
+            ));
+        }
+        let scalars = [
+            m.metallic,
+            m.roughness,
+            m.specular,
+            m.emissive_strength,
+            m.transmission,
+        ];
+        if !m.base_color.is_finite()
+            || !m.emissive.is_finite()
+            || scalars.iter().any(|v| !v.is_finite())
+        {
+            return Err(content(
+                format!("material '{}'", m.name),
+                "has NaN or infinite parameters".into(),
+            ));
+        }
+    }
+    for mesh in &mut scene.meshes {
+        let n = mesh.positions.len();
+        let name = mesh.name.clone();
+        if mesh.indices.len() % 3 != 0 {
+            return Err(geo(
+                &name,
+                format!("{} indices is not a multiple of 3", mesh.indices.len()),
+            ));
+        }
+        if mesh.indices.is_empty() {
+            return Err(geo(&name, "has no triangles".into()));
+        }
+        if let Some(bad) = mesh.indices.iter().find(|&&i| i as usize >= n) {
+            return Err(geo(
+                &name,
+                format!("index {bad} out of range ({n} vertices)"),
+            ));
+        }
+        if mesh.material >= nmat {
+            return Err(geo(
+                &name,
+                "references a material that does not exist".into(),
+            ));
+        }
+        if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
+            return Err(geo(
+                &name,
+                format!("vertex {i} has a NaN or infinite position"),
+            ));
+        }
+        let uv_needed = {
+            let m = &scene.materials[mesh.material];
+            [
+                m.base_color_texture,
+                m.metallic_roughness_texture,
+                m.emissive_texture,
+                m.normal_texture,
+            ]
+            .iter()
+            .flatten()
+            .any(|r| r.uv_set == 0)
+        };
+        if mesh.uv0.is_empty() {
+            if uv_needed {
+                return Err(geo(
+                    &name,
+                    "has no TEXCOORD_0 but its material is textured".into(),
+                ));
+            }
+            mesh.uv0 = vec![glam::Vec2::ZERO; n];
+        }
+        if mesh.uv0.len() != n {
+            return Err(geo(&name, "TEXCOORD_0 length differs from POSITION".into()));
+        }
+        if mesh.uv0.iter().any(|u| !u.is_finite()) {
+            return Err(geo(&name, "TEXCOORD_0 has NaN or infinite values".into()));
+        }
+        if let Some(uv1) = &mesh.uv1
+            && (uv1.len() != n || uv1.iter().any(|u| !u.is_finite()))
+        {
+            return Err(geo(
+                &name,
+                "TEXCOORD_1 is inconsistent or not finite".into(),
+            ));
+        }
+        // Zero-area triangles.
+        let area2 = |t: &[u32]| {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+            (b - a).cross(c - a).length()
+        };
+        let degenerate = mesh
+            .indices
+            .chunks_exact(3)
+            .filter(|t| area2(t) <= 1e-12)
+            .count();
+        if degenerate > 0 {
+            if !opts.drop_degenerate {
+                return Err(geo(
+                    &name,
+                    format!(
+                        "{degenerate} of {} triangles have zero area (use --drop-degenerate to drop them)",
+                        mesh.indices.len() / 3
+                    ),
+                ));
+            }
+            let kept: Vec<u32> = mesh
+                .indices
+                .chunks_exact(3)
+                .filter(|t| area2(t) > 1e-12)
+                .flatten()
+                .copied()
+                .collect();
+            if kept.is_empty() {
+                return Err(geo(&name, "all triangles have zero area".into()));
+            }
+            mesh.indices = kept;
+        }
+        if mesh.normals.is_empty() {
+            mesh.compute_normals();
+        }
+        if mesh.normals.len() != n {
+            return Err(geo(&name, "NORMAL length differs from POSITION".into()));
+        }
+        if mesh.normals.iter().any(|v| !v.is_finite()) {
+            return Err(geo(&name, "NORMAL has NaN or infinite values".into()));
+        }
+        if mesh.tangents.len() != n || mesh.tangents.iter().any(|t| !t.is_finite()) {
+            mesh.compute_tangents();
+        }
+    }
+    for inst in &scene.instances {
+        if inst.mesh >= scene.meshes.len() {
+            return Err(content(
+                format!("node '{}'", inst.name),
+                "references a mesh that does not exist".into(),
+            ));
+        }
+        if !inst.transform.is_finite() || inst.transform.determinant().abs() < 1e-20 {
+            return Err(content(
+                format!("node '{}'", inst.name),
+                "has a NaN, infinite or singular transform".into(),
+            ));
+        }
+    }
+    for l in &scene.lights {
+        let what = format!("light '{}'", l.name);
+        if !l.color.is_finite()
+            || !l.intensity.is_finite()
+            || l.intensity < 0.0
+            || !l.position.is_finite()
+            || !l.direction.is_finite()
+        {
+            return Err(content(
+                what,
+                "has NaN, infinite or negative parameters".into(),
+            ));
+        }
+        if let LightKind::Spot {
+            inner_cone,
+            outer_cone,
+        } = l.kind
+            && !(0.0..=std::f32::consts::FRAC_PI_2).contains(&outer_cone)
+                | !(0.0..=outer_cone).contains(&inner_cone)
+        {
+            return Err(content(what, "spot cone angles out of range".into()));
+        }
+    }
+    for c in &scene.cameras {
+        if !(c.yfov > 0.0 && c.yfov < std::f32::consts::PI) || !c.transform.is_finite() {
+            return Err(content(
+                format!("camera '{}'", c.name),
+                "field of view or transform invalid".into(),
+            ));
+        }
+    }
+    if scene.instances.is_empty() {
+        return Err(content(
+            "scene".into(),
+            "contains no triangle meshes".into(),
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,371 @@
+//! glTF round trips of every built-in scene, and the bad-input cases of the loader.
+
+use glam::{Vec3, Vec4};
+use lightlab_scene::{LoadOptions, Scene, SceneError, builtin, gltf_io, load};
+use std::path::Path;
+
+fn world_triangles(s: &Scene) -> Vec<[Vec3; 3]> {
+    let mut out = vec![];
+    for inst in &s.instances {
+        let m = &s.meshes[inst.mesh];
+        for t in m.indices.chunks_exact(3) {
+            out.push(
+                [t[0], t[1], t[2]]
+                    .map(|i| inst.transform.transform_point3(m.positions[i as usize])),
+            );
+        }
+    }
+    out
+}
+
+fn assert_same_scene(a: &Scene, b: &Scene) {
+    let (ta, tb) = (world_triangles(a), world_triangles(b));
+    assert_eq!(ta.len(), tb.len(), "{}: triangle count", a.name);
+    for (x, y) in ta.iter().zip(&tb) {
+        for k in 0..3 {
+            assert!((x[k] - y[k]).length() < 1e-5, "{}: triangle moved", a.name);
+        }
+    }
+    assert_eq!(a.materials.len(), b.materials.len());
+    for (x, y) in a.materials.iter().zip(&b.materials) {
+        assert_eq!(x.name, y.name);
+        assert_eq!(x.base_color, y.base_color);
+        assert!((x.emission() - y.emission()).length() < 1e-5 * x.emission().length().max(1.0));
+        assert_eq!(
+            (x.metallic, x.roughness, x.specular),
+            (y.metallic, y.roughness, y.specular)
+        );
+        assert_eq!(x.alpha_mode, y.alpha_mode);
+        assert_eq!(x.double_sided, y.double_sided);
+        assert_eq!(x.transmission, y.transmission);
+        assert_eq!(x.base_color_texture, y.base_color_texture);
+    }
+    assert_eq!(a.textures.len(), b.textures.len());
+    for (x, y) in a.textures.iter().zip(&b.textures) {
+        assert_eq!((x.width, x.height), (y.width, y.height));
+        for (p, q) in x.data.iter().zip(&y.data) {
+            assert!((*p - *q).abs().max_element() < 0.01, "texel {p} vs {q}");
+        }
+    }
+    assert_eq!(a.lights.len(), b.lights.len());
+    for (x, y) in a.lights.iter().zip(&b.lights) {
+        assert_eq!(x.name, y.name);
+        assert_eq!(x.kind, y.kind);
+        assert_eq!(
+            (x.color, x.intensity, x.range),
+            (y.color, y.intensity, y.range)
+        );
+        assert!((x.position - y.position).length() < 1e-5);
+        assert!(
+            (x.direction - y.direction).length() < 1e-5,
+            "{} {}",
+            x.direction,
+            y.direction
+        );
+    }
+    assert_eq!(a.cameras.len(), b.cameras.len());
+    for (x, y) in a.cameras.iter().zip(&b.cameras) {
+        assert_eq!(x.yfov, y.yfov);
+        assert!(x.transform.abs_diff_eq(y.transform, 1e-5));
+    }
+    assert_eq!(a.environment.is_some(), b.environment.is_some());
+    if let (Some(x), Some(y)) = (&a.environment, &b.environment) {
+        assert_eq!(x.image, y.image);
+        assert_eq!(x.intensity, y.intensity);
+    }
+}
+
+#[test]
+fn every_builtin_scene_round_trips_through_glb_and_gltf() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in builtin::NAMES {
+        let s = builtin::builtin(name).unwrap();
+        for ext in ["glb", "gltf"] {
+            let p = dir.path().join(format!("{name}.{ext}"));
+            gltf_io::export(&s, &p).unwrap();
+            let back = gltf_io::import(&p, LoadOptions::default()).unwrap();
+            assert_same_scene(&s, &back);
+        }
+    }
+    // No temporary files are left behind.
+    for e in std::fs::read_dir(dir.path()).unwrap() {
+        let n = e.unwrap().file_name().into_string().unwrap();
+        assert!(!n.ends_with(".tmp"), "{n}");
+    }
+}
+
+#[test]
+fn builtin_scenes_have_cameras_and_the_specified_sizes() {
+    for name in builtin::NAMES {
+        let s = builtin::builtin(name).unwrap();
+        assert!(s.default_camera().is_some(), "{name}");
+        assert!(builtin::describe(name).is_some());
+        let mut s2 = s.clone();
+        lightlab_scene::validate::validate(&mut s2, Path::new(name), LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    let bush = builtin::builtin("bush").unwrap();
+    let leaves = bush.meshes.iter().find(|m| m.name == "leaves").unwrap();
+    assert!((19_000..=21_000).contains(&leaves.triangle_count()));
+    let prt = builtin::builtin("prt").unwrap();
+    let high = prt.meshes.iter().find(|m| m.name == "knot_high").unwrap();
+    assert!((50_000..=200_000).contains(&high.triangle_count()));
+    let cornell = builtin::builtin("cornell").unwrap();
+    assert!(cornell.materials.iter().any(|m| m.is_emissive()));
+}
+
+/// Every triangle of a closed mesh shares each of its edges with exactly one other triangle
+/// (after welding coincident positions): the shadow-volume scene needs this.
+#[test]
+fn shadow_scene_meshes_are_closed() {
+    let s = builtin::builtin("shadows").unwrap();
+    for m in &s.meshes {
+        let key = |p: Vec3| (p * 1e4).round().as_ivec3().to_array();
+        let mut edges = std::collections::HashMap::new();
+        for t in m.indices.chunks_exact(3) {
+            for k in 0..3 {
+                let (a, b) = (
+                    key(m.positions[t[k] as usize]),
+                    key(m.positions[t[(k + 1) % 3] as usize]),
+                );
+                *edges.entry((a, b)).or_insert(0i32) += 1;
+                *edges.entry((b, a)).or_insert(0i32) -= 1;
+            }
+        }
+        // Each directed edge must be matched by its reverse.
+        assert!(
+            edges.values().all(|&c| c == 0),
+            "mesh '{}' is not closed",
+            m.name
+        );
+    }
+}
+
+// ---- bad input -------------------------------------------------------------------------------
+
+/// Write a .gltf with the given JSON and binary buffer (as `<stem>.bin`).
+fn write_gltf(dir: &Path, name: &str, json: serde_json::Value, bin: &[u8]) -> std::path::PathBuf {
+    let p = dir.join(format!("{name}.gltf"));
+    std::fs::write(dir.join(format!("{name}.bin")), bin).unwrap();
+    std::fs::write(&p, serde_json::to_vec(&json).unwrap()).unwrap();
+    p
+}
+
+/// One triangle (positions, optional normals), with indices.
+fn triangle_file(
+    dir: &Path,
+    name: &str,
+    positions: [[f32; 3]; 3],
+    normals: bool,
+    extra: impl FnOnce(&mut serde_json::Value),
+) -> std::path::PathBuf {
+    let mut bin: Vec<u8> = positions
+        .iter()
+        .flatten()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    let mut attrs = serde_json::json!({ "POSITION": 0 });
+    let mut views = vec![serde_json::json!({ "buffer": 0, "byteOffset": 0, "byteLength": 36 })];
+    let mut accessors = vec![
+        serde_json::json!({ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+        "min": [-10.0, -10.0, -10.0], "max": [10.0, 10.0, 10.0] }),
+    ];
+    if normals {
+        bin.extend(
+            [0f32, 0.0, 1.0]
+                .repeat(3)
+                .iter()
+                .flat_map(|f| f.to_le_bytes()),
+        );
+        views.push(serde_json::json!({ "buffer": 0, "byteOffset": 36, "byteLength": 36 }));
+        accessors.push(serde_json::json!({ "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3" }));
+        attrs["NORMAL"] = serde_json::json!(1);
+    }
+    let mut json = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "scene": 0, "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "name": "tri", "primitives": [{ "attributes": attrs }] }],
+        "buffers": [{ "uri": format!("{name}.bin"), "byteLength": bin.len() }],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    extra(&mut json);
+    write_gltf(dir, name, json, &bin)
+}
+
+const GOOD: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+fn load_err(p: &Path) -> String {
+    let e = load(p.to_str().unwrap(), LoadOptions::default()).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains(p.file_name().unwrap().to_str().unwrap()),
+        "error does not name the file: {msg}"
+    );
+    msg
+}
+
+#[test]
+fn a_good_minimal_file_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = triangle_file(dir.path(), "good", GOOD, true, |_| {});
+    let s = load(p.to_str().unwrap(), LoadOptions::default()).unwrap();
+    assert_eq!(s.triangle_count(), 1);
+}
+
+#[test]
+fn malformed_and_truncated_files_are_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("broken.gltf");
+    std::fs::write(&p, b"{ \"asset\": { \"version\": ").unwrap();
+    load_err(&p);
+    let p = dir.path().join("short.glb");
+    std::fs::write(&p, b"glTF\x02\x00\x00\x00").unwrap();
+    load_err(&p);
+    // A real GLB cut in half.
+    let full = dir.path().join("full.glb");
+    gltf_io::export(&builtin::builtin("cornell").unwrap(), &full).unwrap();
+    let bytes = std::fs::read(&full).unwrap();
+    let p = dir.path().join("half.glb");
+    std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
+    load_err(&p);
+    let p = dir.path().join("missing.glb");
+    assert!(matches!(
+        load(p.to_str().unwrap(), LoadOptions::default()),
+        Err(SceneError::Io { .. })
+    ));
+}
+
+#[test]
+fn missing_buffer_file_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = triangle_file(dir.path(), "nobin", GOOD, true, |j| {
+        j["buffers"][0]["uri"] = "absent.bin".into()
+    });
+    let msg = load_err(&p);
+    assert!(msg.contains("buffer"), "{msg}");
+}
+
+#[test]
+fn unsupported_required_extension_is_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = triangle_file(dir.path(), "draco", GOOD, true, |j| {
+        j["extensionsUsed"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+        j["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+    });
+    let msg = load_err(&p);
+    assert!(msg.contains("KHR_draco_mesh_compression"), "{msg}");
+}
+
+#[test]
+fn nan_positions_are_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = triangle_file(
+        dir.path(),
+        "nan",
+        [[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        true,
+        |_| {},
+    );
+    let msg = load_err(&p);
+    assert!(msg.contains("NaN"), "{msg}");
+    let p = triangle_file(
+        dir.path(),
+        "inf",
+        [[0.0, 0.0, 0.0], [f32::INFINITY, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        true,
+        |_| {},
+    );
+    load_err(&p);
+}
+
+#[test]
+fn degenerate_triangles_are_rejected_or_dropped_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = triangle_file(
+        dir.path(),
+        "degen",
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+        true,
+        |_| {},
+    );
+    let msg = load_err(&p);
+    assert!(msg.contains("zero area") && msg.contains("'tri'"), "{msg}");
+    // Dropping leaves nothing here, which is still an error.
+    let e = load(
+        p.to_str().unwrap(),
+        LoadOptions {
+            drop_degenerate: true,
+        },
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("zero area"));
+}
+
+#[test]
+fn missing_normals_are_computed_as_the_spec_requires() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = triangle_file(dir.path(), "nonormals", GOOD, false, |_| {});
+    let s = load(p.to_str().unwrap(), LoadOptions::default()).unwrap();
+    assert!(
+        s.meshes[0]
+            .normals
+            .iter()
+            .all(|n| (*n - Vec3::Z).length() < 1e-6)
+    );
+}
+
+#[test]
+fn textured_mesh_without_uvs_is_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 1×1 PNG as the texture.
+    let mut png = vec![];
+    image::RgbaImage::from_raw(1, 1, vec![255, 0, 0, 255])
+        .unwrap()
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    std::fs::write(dir.path().join("t.png"), &png).unwrap();
+    let p = triangle_file(dir.path(), "nouv", GOOD, true, |j| {
+        j["images"] = serde_json::json!([{ "uri": "t.png" }]);
+        j["textures"] = serde_json::json!([{ "source": 0 }]);
+        j["materials"] =
+            serde_json::json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
+        j["meshes"][0]["primitives"][0]["material"] = 0.into();
+    });
+    let msg = load_err(&p);
+    assert!(msg.contains("TEXCOORD_0"), "{msg}");
+}
+
+#[test]
+fn missing_and_empty_images_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = triangle_file(dir.path(), "noimg", GOOD, true, |j| {
+        j["images"] = serde_json::json!([{ "uri": "absent.png" }]);
+        j["textures"] = serde_json::json!([{ "source": 0 }]);
+    });
+    let msg = load_err(&p);
+    assert!(msg.contains("image"), "{msg}");
+    std::fs::write(dir.path().join("empty.png"), b"").unwrap();
+    let p = triangle_file(dir.path(), "emptyimg", GOOD, true, |j| {
+        j["images"] = serde_json::json!([{ "uri": "empty.png" }]);
+        j["textures"] = serde_json::json!([{ "source": 0 }]);
+    });
+    load_err(&p);
+}
+
+#[test]
+fn unknown_scene_names_are_explained() {
+    let e = load("no-such-scene", LoadOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("lightlab scenes"), "{e}");
+}
+
+#[test]
+fn export_refuses_other_extensions_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = builtin::builtin("cornell").unwrap();
+    assert!(gltf_io::export(&s, &dir.path().join("x.obj")).is_err());
+    assert!(gltf_io::export(&s, &dir.path().join("nodir/x.glb")).is_err());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    let _ = Vec4::ZERO;
+}
