@@ -1,1 +1,14 @@
+//! # lightlab-trace
+//!
+//! CPU ray casting ([`accel`]) and the reference path tracer ([`render`]) that every real-time
+//! technique of lightlab is measured against. `reference` renders all light
+//! (`max_depth` bounces), `direct` only direct light (`max_depth = 1`).
+#![forbid(unsafe_code)]
 
+pub mod accel;
+pub mod bsdf;
+pub mod lights;
+pub mod render;
+
+pub use accel::Accel;
+pub use render::{PathTracer, RenderError, RenderSettings};

@@ -1,0 +1,365 @@
+//! CPU ray casting over a compressed wide BVH (obvhs CWBVH, PLOC build).
+//!
+//! The scene's instances are flattened into world-space triangles stored in BVH leaf order, so a
+//! leaf's triangles are contiguous in memory. Closest-hit queries return the distance,
+//! barycentrics and the (instance, triangle) that was hit; any-hit queries answer shadow rays.
+//! Alpha-tested (MASK, and BLEND treated as MASK at 0.5) triangles are tested against their
+//! texture inside the traversal, so holes in leaves let rays through.
+
+use glam::{Vec2, Vec3, Vec3A};
+use lightlab_scene::{AlphaMode, Scene, Texture};
+use obvhs::ray::{Ray, RayHit};
+use obvhs::rt_triangle::RtTriangle;
+use obvhs::{BvhBuildParams, cwbvh::CwBvh, triangle::Triangle};
+use rayon::prelude::*;
+
+/// Where a triangle came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrimRef {
+    pub instance: u32,
+    /// Triangle index within the instance's mesh.
+    pub triangle: u32,
+}
+
+/// A closest hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub prim: PrimRef,
+    /// Barycentric weights of the triangle's second and third vertices (the first has
+    /// 1 − b.x − b.y).
+    pub bary: Vec2,
+}
+
+struct AlphaTri {
+    uv: [Vec2; 3],
+    texture: Option<u32>,
+    base_alpha: f32,
+    cutoff: f32,
+}
+
+/// The acceleration structure of a scene.
+pub struct Accel {
+    bvh: CwBvh,
+    /// Triangles in BVH primitive order.
+    tris: Vec<RtTriangle>,
+    prims: Vec<PrimRef>,
+    /// Index into `alpha` per BVH primitive, u32::MAX when opaque.
+    alpha_index: Vec<u32>,
+    alpha: Vec<AlphaTri>,
+    textures: Vec<Texture>,
+}
+
+/// A traversal ray. Negative zeros in the direction are made positive (`−0.0 + 0.0 = +0.0`):
+/// obvhs derives the traversal octant from sign bits, and an axis-aligned direction such as
+/// `−Vec3::Z = (−0, −0, −1)` otherwise misses geometry it should hit.
+#[inline(always)]
+fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
+    Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax)
+}
+
+/// Möller–Trumbore over obvhs's triangle layout (`e1 = v0 − v1`, `e2 = v2 − v0`,
+/// `ng = e1 × e2`). obvhs's own `RtTriangle::intersect` tests barycentrics by their sign bit,
+/// which rejects `−0.0`: axis-aligned rays (a camera ray through the image centre) then miss.
+/// Ordinary comparisons accept `−0.0 ≥ 0`.
+#[inline(always)]
+fn intersect_triangle(tri: &RtTriangle, ray: &Ray) -> f32 {
+    let det = tri.ng.dot(ray.direction);
+    if det == 0.0 {
+        return f32::INFINITY;
+    }
+    let inv_det = 1.0 / det;
+    let c = tri.v0 - ray.origin;
+    let r = ray.direction.cross(c);
+    let u = r.dot(tri.e2) * inv_det;
+    let v = r.dot(tri.e1) * inv_det;
+    if u >= 0.0 && v >= 0.0 && u + v <= 1.0 {
+        let t = tri.ng.dot(c) * inv_det;
+        if t > ray.tmin && t <= ray.tmax {
+            return t;
+        }
+    }
+    f32::INFINITY
+}
+
+/// A ray for batch queries.
+#[derive(Clone, Copy, Debug)]
+pub struct RayQuery {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub tmax: f32,
+}
+
+impl Accel {
+    /// Build the BVH of all instances of `scene` (PLOC, medium quality, parallel).
+    pub fn new(scene: &Scene) -> Accel {
+        let mut tris = Vec::with_capacity(scene.triangle_count());
+        let mut prims = Vec::with_capacity(tris.capacity());
+        let mut alpha_of: Vec<Option<AlphaTri>> = Vec::with_capacity(tris.capacity());
+        for (ii, inst) in scene.instances.iter().enumerate() {
+            let mesh = &scene.meshes[inst.mesh];
+            let mat = &scene.materials[mesh.material];
+            let cutoff = match mat.alpha_mode {
+                AlphaMode::Opaque => None,
+                AlphaMode::Mask { cutoff } => Some(cutoff),
+                AlphaMode::Blend => Some(0.5),
+            };
+            for (ti, t) in mesh.indices.chunks_exact(3).enumerate() {
+                let p = [t[0], t[1], t[2]].map(|i| {
+                    Vec3A::from(inst.transform.transform_point3(mesh.positions[i as usize]))
+                });
+                tris.push(Triangle {
+                    v0: p[0],
+                    v1: p[1],
+                    v2: p[2],
+                });
+                prims.push(PrimRef {
+                    instance: ii as u32,
+                    triangle: ti as u32,
+                });
+                alpha_of.push(cutoff.map(|cutoff| AlphaTri {
+                    uv: [t[0], t[1], t[2]].map(|i| mesh.uv0[i as usize]),
+                    texture: mat.base_color_texture.map(|r| r.texture as u32),
+                    base_alpha: mat.base_color.w,
+                    cutoff,
+                }));
+            }
+        }
+        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &tris,
+            BvhBuildParams::medium_build(),
+            &mut std::time::Duration::default(),
+        );
+        // Reorder the primitives into BVH order.
+        let order = &bvh.primitive_indices;
+        let rt: Vec<RtTriangle> = order
+            .iter()
+            .map(|&i| RtTriangle::from(&tris[i as usize]))
+            .collect();
+        let prims_o: Vec<PrimRef> = order.iter().map(|&i| prims[i as usize]).collect();
+        // Alpha records by original triangle; BVH slots (pre-splits may duplicate a triangle)
+        // point at them.
+        let mut alpha = vec![];
+        let orig_alpha: Vec<u32> = alpha_of
+            .into_iter()
+            .map(|a| match a {
+                Some(a) => {
+                    alpha.push(a);
+                    alpha.len() as u32 - 1
+                }
+                None => u32::MAX,
+            })
+            .collect();
+        let alpha_index: Vec<u32> = order.iter().map(|&i| orig_alpha[i as usize]).collect();
+        Accel {
+            bvh,
+            tris: rt,
+            prims: prims_o,
+            alpha_index,
+            alpha,
+            textures: scene.textures.clone(),
+        }
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Whether the ray passes through the alpha-tested hole of BVH primitive `slot` at the
+    /// intersection found with `ray`.
+    #[inline]
+    fn alpha_rejects(&self, slot: usize, ray: &Ray) -> bool {
+        let ai = self.alpha_index[slot];
+        if ai == u32::MAX {
+            return false;
+        }
+        let a = &self.alpha[ai as usize];
+        let b = self.tris[slot].compute_barycentric(ray);
+        let uv = a.uv[0] * (1.0 - b.x - b.y) + a.uv[1] * b.x + a.uv[2] * b.y;
+        let alpha = a.base_alpha
+            * match a.texture {
+                Some(t) => self.textures[t as usize].sample(uv).w,
+                None => 1.0,
+            };
+        alpha < a.cutoff
+    }
+
+    #[inline]
+    fn test(&self, ray: &Ray, slot: usize) -> f32 {
+        let t = intersect_triangle(&self.tris[slot], ray);
+        if t < f32::INFINITY && self.alpha_rejects(slot, &Ray { tmax: t, ..*ray }) {
+            return f32::INFINITY;
+        }
+        t
+    }
+
+    /// Closest hit along `origin + t·dir`, t ∈ (0, tmax]. `dir` need not be normalised
+    /// (t is in units of `dir`).
+    pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
+        let ray = make_ray(origin, dir, tmax);
+        let mut hit = RayHit::none();
+        if self
+            .bvh
+            .ray_traverse(ray, &mut hit, |r, slot| self.test(r, slot))
+        {
+            let slot = hit.primitive_id as usize;
+            let at = Ray { tmax: hit.t, ..ray };
+            // obvhs's (u, v) are the weights of v1 and v2 (v0 gets 1 − u − v).
+            let b = self.tris[slot].compute_barycentric(&at);
+            Some(Hit {
+                t: hit.t,
+                prim: self.prims[slot],
+                bary: b,
+            })
+        } else {
+            None
+        }
+    }
+
+    /// Whether anything blocks `origin + t·dir` for t ∈ (0, tmax).
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+        let ray = make_ray(origin, dir, tmax);
+        !self
+            .bvh
+            .ray_traverse_miss(ray, |r, slot| self.test(r, slot))
+    }
+
+    /// Closest hits of a batch of rays, across threads.
+    pub fn intersect_batch(&self, rays: &[RayQuery]) -> Vec<Option<Hit>> {
+        rays.par_iter()
+            .with_min_len(256)
+            .map(|r| self.intersect(r.origin, r.dir, r.tmax))
+            .collect()
+    }
+
+    /// Occlusion of a batch of rays, across threads.
+    pub fn occluded_batch(&self, rays: &[RayQuery]) -> Vec<bool> {
+        rays.par_iter()
+            .with_min_len(256)
+            .map(|r| self.occluded(r.origin, r.dir, r.tmax))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Mat4, Vec4};
+    use lightlab_scene::{Instance, Material, Mesh, TextureRef};
+
+    fn one_triangle_scene(material: Material, textures: Vec<Texture>) -> Scene {
+        let mut s = Scene::default();
+        s.materials.push(material);
+        s.textures = textures;
+        s.meshes.push(Mesh {
+            name: "t".into(),
+            positions: vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ],
+            normals: vec![Vec3::Z; 3],
+            uv0: vec![
+                Vec2::new(0.0, 0.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(0.0, 1.0),
+            ],
+            indices: vec![0, 1, 2],
+            ..Default::default()
+        });
+        s.instances.push(Instance {
+            name: "t".into(),
+            mesh: 0,
+            transform: Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)),
+        });
+        s
+    }
+
+    #[test]
+    fn closest_hit_distance_and_barycentrics() {
+        let s = one_triangle_scene(Material::default(), vec![]);
+        let a = Accel::new(&s);
+        let h = a
+            .intersect(Vec3::new(0.25, 0.5, 0.0), -Vec3::Z, f32::INFINITY)
+            .unwrap();
+        assert!((h.t - 2.0).abs() < 1e-6);
+        // p = (1−u−v)·v0 + u·v1 + v·v2 with v1 = (1,0), v2 = (0,1): u = 0.25, v = 0.5.
+        assert!(
+            (h.bary - Vec2::new(0.25, 0.5)).length() < 1e-6,
+            "{}",
+            h.bary
+        );
+        assert!(
+            a.intersect(Vec3::new(0.8, 0.8, 0.0), -Vec3::Z, f32::INFINITY)
+                .is_none()
+        );
+        assert!(
+            a.intersect(Vec3::new(0.25, 0.5, 0.0), -Vec3::Z, 1.5)
+                .is_none()
+        );
+        assert!(a.occluded(Vec3::new(0.25, 0.5, 0.0), -Vec3::Z, 3.0));
+        assert!(!a.occluded(Vec3::new(0.25, 0.5, 0.0), -Vec3::Z, 1.9));
+        // Hits from behind count too.
+        assert!(
+            a.intersect(Vec3::new(0.25, 0.5, -4.0), Vec3::Z, f32::INFINITY)
+                .is_some()
+        );
+    }
+
+    #[test]
+    fn alpha_test_makes_holes() {
+        // A 2×1 texture: left half opaque, right half transparent.
+        let tex = Texture {
+            name: "mask".into(),
+            width: 2,
+            height: 1,
+            data: vec![Vec4::new(1.0, 1.0, 1.0, 1.0), Vec4::new(1.0, 1.0, 1.0, 0.0)],
+            srgb: true,
+        };
+        let mat = Material {
+            base_color_texture: Some(TextureRef {
+                texture: 0,
+                uv_set: 0,
+            }),
+            alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+            ..Default::default()
+        };
+        let s = one_triangle_scene(mat, vec![tex]);
+        let a = Accel::new(&s);
+        assert!(
+            a.intersect(Vec3::new(0.1, 0.1, 0.0), -Vec3::Z, f32::INFINITY)
+                .is_some()
+        );
+        assert!(
+            a.intersect(Vec3::new(0.8, 0.1, 0.0), -Vec3::Z, f32::INFINITY)
+                .is_none()
+        );
+        assert!(!a.occluded(Vec3::new(0.8, 0.1, 0.0), -Vec3::Z, 10.0));
+        assert!(a.occluded(Vec3::new(0.1, 0.1, 0.0), -Vec3::Z, 10.0));
+    }
+
+    #[test]
+    fn batch_matches_single_queries() {
+        let s = lightlab_scene::builtin::builtin("cornell").unwrap();
+        let a = Accel::new(&s);
+        let mut rng = lightlab_core::sampling::Rng::new(1, 0);
+        let rays: Vec<RayQuery> = (0..2000)
+            .map(|_| RayQuery {
+                origin: Vec3::new(0.278, 0.27, 0.28),
+                // Towards the back of the box (its front is open).
+                dir: {
+                    let mut d = lightlab_core::sampling::uniform_sphere(rng.next_vec2());
+                    d.z = d.z.abs();
+                    d
+                },
+                tmax: f32::INFINITY,
+            })
+            .collect();
+        let batch = a.intersect_batch(&rays);
+        for (r, b) in rays.iter().zip(&batch) {
+            assert_eq!(*b, a.intersect(r.origin, r.dir, r.tmax));
+            // Every ray towards the back of the box hits a wall.
+            assert!(b.is_some());
+        }
+    }
+}

@@ -1,0 +1,402 @@
+//! The reference path tracer: unidirectional, next-event estimation with multiple importance
+//! sampling (power heuristic) for area and environment lights, every punctual light and the sun
+//! sampled at each vertex, Russian roulette after three bounces.
+//!
+//! Path depth counts scattering events: emission seen directly has depth 0, direct lighting
+//! depth 1. A contribution of depth d is kept when `min_depth ≤ d ≤ max_depth`; technique
+//! `direct` is `max_depth = 1`.
+//!
+//! Surfaces shade two-sided (the shading normal is turned towards the viewer), emitters emit
+//! from their front side only unless double-sided, and thin translucent materials transmit a
+//! fraction of their diffuse light to the back (foliage).
+//!
+//! Determinism: pixel (x, y) draws from `Rng::new(seed, y·width + x)` for all its samples, so the
+//! image does not depend on the thread count or scheduling.
+
+use crate::accel::{Accel, Hit};
+use crate::bsdf::Bsdf;
+use crate::lights::{LightSet, emission, sample_punctual};
+use glam::{Mat3, Vec2, Vec3};
+use lightlab_core::image::Image;
+use lightlab_core::sampling::{Frame, Rng, power_heuristic};
+use lightlab_scene::{Camera, Scene};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// Largest accepted image side and sample count; beyond these a request is a mistake.
+pub const MAX_SIDE: u32 = 16_384;
+pub const MAX_SPP: u32 = 1 << 20;
+
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    /// Largest number of scattering events on a path.
+    pub max_depth: u32,
+    /// Smallest number of scattering events a contribution must have (0 = everything).
+    pub min_depth: u32,
+    pub seed: u64,
+    /// Index of the scene camera to use (0 = default camera).
+    pub camera: usize,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 256,
+            height: 256,
+            spp: 64,
+            max_depth: 16,
+            min_depth: 0,
+            seed: 0,
+            camera: 0,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum RenderError {
+    #[error("invalid render settings: {0}")]
+    InvalidSettings(String),
+    #[error("the scene has no camera {0}")]
+    NoCamera(usize),
+    #[error("cancelled")]
+    Cancelled,
+}
+
+impl RenderSettings {
+    pub fn validate(&self) -> Result<(), RenderError> {
+        let bad = |m: String| Err(RenderError::InvalidSettings(m));
+        if self.width == 0 || self.height == 0 {
+            return bad(format!(
+                "image size {}×{} must be at least 1×1",
+                self.width, self.height
+            ));
+        }
+        if self.width > MAX_SIDE || self.height > MAX_SIDE {
+            return bad(format!(
+                "image size {}×{} exceeds the limit of {MAX_SIDE} per side",
+                self.width, self.height
+            ));
+        }
+        if self.spp == 0 || self.spp > MAX_SPP {
+            return bad(format!(
+                "samples per pixel {} must be in 1..={MAX_SPP}",
+                self.spp
+            ));
+        }
+        if self.max_depth == 0 || self.max_depth > 1024 {
+            return bad(format!("max depth {} must be in 1..=1024", self.max_depth));
+        }
+        if self.min_depth > self.max_depth {
+            return bad(format!(
+                "min depth {} exceeds max depth {}",
+                self.min_depth, self.max_depth
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Shading information at a hit.
+pub struct Surface {
+    pub p: Vec3,
+    /// Geometric normal of the authored front side.
+    pub ng: Vec3,
+    /// Interpolated (and normal-mapped) shading normal, on the front side.
+    pub ns: Vec3,
+    pub uv: Vec2,
+    pub material: usize,
+}
+
+/// Reconstruct the surface at a hit.
+pub fn surface(scene: &Scene, hit: &Hit) -> Surface {
+    let inst = &scene.instances[hit.prim.instance as usize];
+    let mesh = &scene.meshes[inst.mesh];
+    let t = hit.prim.triangle as usize * 3;
+    let idx = [mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]].map(|i| i as usize);
+    let (b1, b2) = (hit.bary.x, hit.bary.y);
+    let b0 = 1.0 - b1 - b2;
+    let pw = idx.map(|i| inst.transform.transform_point3(mesh.positions[i]));
+    let p = pw[0] * b0 + pw[1] * b1 + pw[2] * b2;
+    let ng = (pw[1] - pw[0]).cross(pw[2] - pw[0]).normalize_or(Vec3::Y);
+    let nm: Mat3 = inst.normal_matrix();
+    let n_interp =
+        mesh.normals[idx[0]] * b0 + mesh.normals[idx[1]] * b1 + mesh.normals[idx[2]] * b2;
+    let mut ns = (nm * n_interp).normalize_or(ng);
+    if ns.dot(ng) < 0.0 {
+        // Mirrored transforms or inconsistent authored normals: follow the geometry.
+        ns = -ns;
+    }
+    let uv = mesh.uv0[idx[0]] * b0 + mesh.uv0[idx[1]] * b1 + mesh.uv0[idx[2]] * b2;
+    let material = mesh.material;
+    let mat = &scene.materials[material];
+    if let Some(r) = mat.normal_texture
+        && mesh.tangents.len() == mesh.positions.len()
+    {
+        let tg =
+            mesh.tangents[idx[0]] * b0 + mesh.tangents[idx[1]] * b1 + mesh.tangents[idx[2]] * b2;
+        let tw = Mat3::from_mat4(inst.transform) * tg.truncate();
+        let tw = (tw - ns * ns.dot(tw)).normalize_or_zero();
+        if tw != Vec3::ZERO {
+            let bw = ns.cross(tw) * if tg.w < 0.0 { -1.0 } else { 1.0 };
+            let s = scene.textures[r.texture].sample(uv).truncate() * 2.0 - Vec3::ONE;
+            let s = Vec3::new(s.x * mat.normal_scale, s.y * mat.normal_scale, s.z);
+            let mapped = (tw * s.x + bw * s.y + ns * s.z).normalize_or(ns);
+            if mapped.dot(ng) > 0.0 {
+                ns = mapped;
+            }
+        }
+    }
+    Surface {
+        p,
+        ng,
+        ns,
+        uv,
+        material,
+    }
+}
+
+/// Offset a ray origin off the surface, to the side of `dir`.
+#[inline]
+fn offset(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
+    let eps = 1e-4 * (1.0 + p.abs().max_element());
+    if dir.dot(ng) >= 0.0 {
+        p + ng * eps
+    } else {
+        p - ng * eps
+    }
+}
+
+/// The path tracer over a prepared scene.
+pub struct PathTracer<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a Accel,
+    pub lights: LightSet,
+}
+
+impl<'a> PathTracer<'a> {
+    pub fn new(scene: &'a Scene, accel: &'a Accel) -> Self {
+        PathTracer {
+            scene,
+            accel,
+            lights: LightSet::new(scene),
+        }
+    }
+
+    /// Radiance along one camera ray.
+    pub fn radiance(&self, origin: Vec3, dir: Vec3, s: &RenderSettings, rng: &mut Rng) -> Vec3 {
+        let scene = self.scene;
+        let keep = |depth: u32| depth >= s.min_depth && depth <= s.max_depth;
+        let mut l = Vec3::ZERO;
+        let mut beta = Vec3::ONE;
+        let (mut o, mut d) = (origin, dir);
+        // pdf of the BSDF sample that produced `d` (0 for the camera ray: no MIS).
+        let mut prev_pdf = 0.0f32;
+        let mut prev_p = origin;
+        // Scattering events so far.
+        let mut depth = 0u32;
+        loop {
+            let Some(hit) = self.accel.intersect(o, d, f32::INFINITY) else {
+                if let Some(env) = &scene.environment
+                    && keep(depth)
+                {
+                    let le = env.radiance(d);
+                    let w = if prev_pdf > 0.0 {
+                        power_heuristic(prev_pdf, self.lights.env_pdf(d))
+                    } else {
+                        1.0
+                    };
+                    l += beta * le * w;
+                }
+                break;
+            };
+            let sf = surface(scene, &hit);
+            let wo = -d;
+            // Emission, seen from the front (or either side if double-sided).
+            let mat = &scene.materials[sf.material];
+            if mat.is_emissive() && keep(depth) && (wo.dot(sf.ng) > 0.0 || mat.double_sided) {
+                let le = emission(scene, sf.material, sf.uv);
+                let w = if prev_pdf > 0.0 {
+                    let idx = self
+                        .lights
+                        .emitter_index(hit.prim.instance, hit.prim.triangle)
+                        .expect("emissive instance is registered");
+                    let dist = (sf.p - prev_p).length();
+                    power_heuristic(prev_pdf, self.lights.emitter_pdf(idx, dist, wo.dot(sf.ng)))
+                } else {
+                    1.0
+                };
+                l += beta * le * w;
+            }
+            if depth >= s.max_depth {
+                break;
+            }
+            // Shading frame on the viewer's side.
+            let side = if wo.dot(sf.ng) >= 0.0 { 1.0 } else { -1.0 };
+            let ng = sf.ng * side;
+            let frame = Frame::from_normal(sf.ns * side);
+            let wo_l = frame.to_local(wo);
+            if wo_l.z <= 0.0 {
+                break;
+            }
+            let bsdf = Bsdf::new(scene, mat, sf.uv, wo_l.z);
+            depth += 1;
+            // Next-event estimation.
+            if keep(depth) {
+                l += beta * self.direct(&sf, ng, &frame, wo_l, &bsdf, rng);
+            }
+            if depth >= s.max_depth {
+                // Only emission reached by a BSDF sample can still count (MIS partner of the
+                // light samples above).
+                if !(self.lights.has_emitters() || scene.environment.is_some()) {
+                    break;
+                }
+            }
+            // Continue the path.
+            let Some((wi_l, f, pdf)) = bsdf.sample(wo_l, rng.next_f32(), rng.next_vec2()) else {
+                break;
+            };
+            let wi = frame.to_world(wi_l);
+            if wi.dot(ng) * wi_l.z <= 0.0 {
+                // Shading and geometric normals disagree about the side: drop the sample.
+                break;
+            }
+            beta *= f * wi_l.z.abs() / pdf;
+            if depth >= 3 {
+                let q = beta.max_element().min(0.95);
+                if rng.next_f32() >= q {
+                    break;
+                }
+                beta /= q;
+            }
+            if !beta.is_finite() || beta == Vec3::ZERO {
+                break;
+            }
+            prev_pdf = pdf;
+            prev_p = sf.p;
+            o = offset(sf.p, ng, wi);
+            d = wi;
+        }
+        l
+    }
+
+    /// Direct light at a surface: every punctual light, one emitter sample and one
+    /// environment sample, each with MIS where the light is not a delta.
+    fn direct(
+        &self,
+        sf: &Surface,
+        ng: Vec3,
+        frame: &Frame,
+        wo_l: Vec3,
+        bsdf: &Bsdf,
+        rng: &mut Rng,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let mut l = Vec3::ZERO;
+        let add = |ls: crate::lights::LightSample, l: &mut Vec3| {
+            let wi_l = frame.to_local(ls.wi);
+            // Transmission only where the material transmits; geometric side must agree.
+            if wi_l.z * ls.wi.dot(ng) <= 0.0 {
+                return;
+            }
+            let f = bsdf.eval(wo_l, wi_l);
+            if f == Vec3::ZERO {
+                return;
+            }
+            let o = offset(sf.p, ng, ls.wi);
+            let tmax = if ls.dist.is_finite() {
+                ls.dist * (1.0 - 1e-4) - 1e-4
+            } else {
+                f32::INFINITY
+            };
+            if self.accel.occluded(o, ls.wi, tmax) {
+                return;
+            }
+            let w = if ls.pdf > 0.0 {
+                power_heuristic(ls.pdf, bsdf.pdf(wo_l, wi_l))
+            } else {
+                1.0
+            };
+            *l += f * ls.value * wi_l.z.abs() * w;
+        };
+        for i in 0..scene.lights.len() {
+            let u = rng.next_vec2();
+            if let Some(ls) = sample_punctual(scene, i, sf.p, u) {
+                add(ls, &mut l);
+            }
+        }
+        let (u_sel, u) = (rng.next_f32(), rng.next_vec2());
+        if let Some(ls) = self.lights.sample_emitter(scene, sf.p, u_sel, u) {
+            add(ls, &mut l);
+        }
+        let u = rng.next_vec2();
+        if let Some(env) = &scene.environment
+            && let Some(ls) = self.lights.sample_env(env, u)
+        {
+            add(ls, &mut l);
+        }
+        l
+    }
+
+    /// Render an image. `progress(done_rows, total_rows)` is called from worker threads;
+    /// returning false cancels the render.
+    pub fn render(
+        &self,
+        s: &RenderSettings,
+        progress: &(dyn Fn(usize, usize) -> bool + Sync),
+    ) -> Result<Image, RenderError> {
+        s.validate()?;
+        let cam: &Camera = self
+            .scene
+            .cameras
+            .get(s.camera)
+            .ok_or(RenderError::NoCamera(s.camera))?;
+        let (w, h) = (s.width, s.height);
+        let aspect = w as f32 / h as f32;
+        let origin = cam.position();
+        let done = AtomicUsize::new(0);
+        let cancelled = AtomicBool::new(false);
+        let rows: Vec<Vec<Vec3>> = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                if cancelled.load(Ordering::Relaxed) {
+                    return vec![];
+                }
+                let row = (0..w)
+                    .map(|x| {
+                        let mut rng = Rng::new(s.seed, (y as u64) * w as u64 + x as u64);
+                        let mut sum = glam::DVec3::ZERO;
+                        for _ in 0..s.spp {
+                            let j = rng.next_vec2();
+                            let ndc = Vec2::new(
+                                (x as f32 + j.x) / w as f32 * 2.0 - 1.0,
+                                1.0 - (y as f32 + j.y) / h as f32 * 2.0,
+                            );
+                            let dir = cam.ray_direction(ndc, aspect);
+                            let v = self.radiance(origin, dir, s, &mut rng);
+                            if v.is_finite() {
+                                sum += v.as_dvec3();
+                            }
+                        }
+                        (sum / s.spp as f64).as_vec3()
+                    })
+                    .collect();
+                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                if !progress(n, h as usize) {
+                    cancelled.store(true, Ordering::Relaxed);
+                }
+                row
+            })
+            .collect();
+        if cancelled.load(Ordering::Relaxed) {
+            return Err(RenderError::Cancelled);
+        }
+        Ok(Image {
+            width: w,
+            height: h,
+            data: rows.into_iter().flatten().collect(),
+        })
+    }
+}
