@@ -1,1 +1,236 @@
-fn main() {}
+//! `lightlab`: the command line of the lightlab toolkit (see the README and DESIGN.md's
+//! command-line contract).
+//!
+//! Exit codes: 0 success, 1 error (bad input, failed I/O), 2 not implemented yet.
+
+mod bench;
+mod demo;
+mod render;
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand, ValueEnum};
+use lightlab_core::color::ToneMap;
+use lightlab_core::image::{Image, LdrSettings};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "lightlab",
+    version,
+    about = "Bake, render and measure real-time lighting methods against a path-traced reference."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// The main job: render every technique on the built-in scenes and write DIR/report.html.
+    Demo {
+        /// Output folder (created if missing).
+        #[arg(long, default_value = "demo-out")]
+        out: PathBuf,
+        /// `low` finishes in about five minutes on two cores; `high` renders larger, cleaner
+        /// images.
+        #[arg(long, value_enum, default_value_t = demo::Quality::Low)]
+        quality: demo::Quality,
+        /// Only these scenes (default: all built-in scenes).
+        #[arg(long, value_delimiter = ',')]
+        scenes: Vec<String>,
+    },
+    /// List the built-in scenes, one name per line.
+    Scenes {
+        /// Also print a description of each.
+        #[arg(long, short)]
+        verbose: bool,
+    },
+    /// Write a built-in scene as glTF 2.0 (.glb or .gltf).
+    Export {
+        #[arg(long)]
+        scene: String,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Bake light transport (light-maps, SH/PRT, ...) for a scene.
+    Bake {
+        /// A built-in scene name or a .gltf/.glb path.
+        #[arg(long)]
+        scene: String,
+        #[arg(long)]
+        method: String,
+        #[arg(long, default_value = "baked")]
+        out: PathBuf,
+    },
+    /// Render a scene with a technique (`reference`, `direct`, ...).
+    Render(render::RenderArgs),
+    /// Compare two images of equal size: RMSE, relMSE and FLIP (B is the reference).
+    Compare {
+        a: PathBuf,
+        b: PathBuf,
+        /// Print one JSON object as the last line.
+        #[arg(long)]
+        json: bool,
+        /// Exposure applied to both images before FLIP's tone mapping.
+        #[arg(long, default_value_t = 1.0)]
+        exposure: f32,
+    },
+    /// Benchmarks that print figures: `trace` (ray casting), `bake`, `frame`.
+    Bench {
+        #[arg(value_enum)]
+        what: bench::BenchKind,
+        #[arg(long)]
+        scene: String,
+        #[arg(long)]
+        json: bool,
+        /// Technique, for `bench frame`.
+        #[arg(long)]
+        technique: Option<String>,
+        /// Rays per measurement, for `bench trace`.
+        #[arg(long, default_value_t = 1_000_000)]
+        rays: usize,
+    },
+    /// Interactive viewer.
+    View {
+        #[arg(long)]
+        scene: String,
+    },
+}
+
+/// Tone operator choice on the command line.
+#[derive(Clone, Copy, ValueEnum, Debug)]
+pub enum ToneArg {
+    Clamp,
+    Reinhard,
+    Filmic,
+}
+
+impl From<ToneArg> for ToneMap {
+    fn from(t: ToneArg) -> Self {
+        match t {
+            ToneArg::Clamp => ToneMap::Clamp,
+            ToneArg::Reinhard => ToneMap::Reinhard,
+            ToneArg::Filmic => ToneMap::Filmic,
+        }
+    }
+}
+
+/// An error for features that later work will add: exit code 2.
+#[derive(Debug)]
+pub struct NotImplemented(pub String);
+
+impl std::fmt::Display for NotImplemented {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "not implemented yet: {}", self.0)
+    }
+}
+
+impl std::error::Error for NotImplemented {}
+
+pub fn not_implemented(what: impl Into<String>) -> anyhow::Error {
+    anyhow::Error::new(NotImplemented(what.into()))
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            if e.downcast_ref::<NotImplemented>().is_some() {
+                eprintln!("lightlab: {e}");
+                return ExitCode::from(2);
+            }
+            eprintln!("lightlab: error: {e}");
+            for cause in e.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::from(1)
+        }
+    }
+}
+
+pub fn load_scene(spec: &str, drop_degenerate: bool) -> Result<lightlab_scene::Scene> {
+    Ok(lightlab_scene::load(
+        spec,
+        lightlab_scene::LoadOptions { drop_degenerate },
+    )?)
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Demo {
+            out,
+            quality,
+            scenes,
+        } => demo::run(&out, quality, &scenes),
+        Command::Scenes { verbose } => {
+            for name in lightlab_scene::builtin::NAMES {
+                if verbose {
+                    println!(
+                        "{name}\t{}",
+                        lightlab_scene::builtin::describe(name).unwrap_or("")
+                    );
+                } else {
+                    println!("{name}");
+                }
+            }
+            Ok(())
+        }
+        Command::Export { scene, output } => {
+            let s = lightlab_scene::builtin::builtin(&scene).with_context(|| {
+                format!("unknown built-in scene '{scene}' (see `lightlab scenes`)")
+            })?;
+            lightlab_scene::gltf_io::export(&s, &output)?;
+            eprintln!(
+                "wrote {} ({} triangles)",
+                output.display(),
+                s.triangle_count()
+            );
+            Ok(())
+        }
+        Command::Bake { scene, method, .. } => {
+            load_scene(&scene, false)?;
+            Err(not_implemented(format!(
+                "bake method '{method}' (light-map, SH and PRT bakers are planned)"
+            )))
+        }
+        Command::Render(args) => render::run(args),
+        Command::Compare {
+            a,
+            b,
+            json,
+            exposure,
+        } => {
+            let ia = Image::read(&a)?;
+            let ib = Image::read(&b)?;
+            let ldr = LdrSettings {
+                exposure,
+                tone: ToneMap::Filmic,
+            };
+            let c = lightlab_core::metrics::compare(&ia, &ib, ldr)
+                .with_context(|| format!("comparing {} with {}", a.display(), b.display()))?;
+            if json {
+                println!("{}", serde_json::to_string(&c)?);
+            } else {
+                println!("RMSE   {:.6}", c.rmse);
+                println!("relMSE {:.6}", c.relmse);
+                println!("FLIP   {:.6}", c.flip);
+            }
+            Ok(())
+        }
+        Command::Bench {
+            what,
+            scene,
+            json,
+            technique,
+            rays,
+        } => bench::run(what, &scene, json, technique, rays),
+        Command::View { scene } => {
+            load_scene(&scene, false)?;
+            Err(not_implemented(
+                "the interactive viewer (planned with the GPU renderer)",
+            ))
+        }
+    }
+}

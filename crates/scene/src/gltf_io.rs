@@ -454,13 +454,13 @@ pub fn export(scene: &Scene, path: &Path) -> Result<(), SceneError> {
         path: path.into(),
         source: e,
     };
-    while w.bin.len() % 4 != 0 {
+    while !w.bin.len().is_multiple_of(4) {
         w.bin.push(0);
     }
     root["buffers"] = json!([{ "byteLength": w.bin.len() }]);
     if ext == "glb" {
         let mut json_bytes = serde_json::to_vec(&root).expect("serialisable");
-        while json_bytes.len() % 4 != 0 {
+        while !json_bytes.len().is_multiple_of(4) {
             json_bytes.push(b' ');
         }
         let total = 12 + 8 + json_bytes.len() + 8 + w.bin.len();
@@ -500,7 +500,7 @@ struct Writer {
 
 impl Writer {
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() });

@@ -212,7 +212,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         }
     }
     for c in &scene.cameras {
-        if !(c.yfov > 0.0 && c.yfov < std::f32::consts::PI) || !c.transform.is_finite() {
+        if !(c.yfov > 0.0 && c.yfov < std::f32::consts::PI && c.transform.is_finite()) {
             return Err(content(
                 format!("camera '{}'", c.name),
                 "field of view or transform invalid".into(),

@@ -6,7 +6,7 @@
 //! Alpha-tested (MASK, and BLEND treated as MASK at 0.5) triangles are tested against their
 //! texture inside the traversal, so holes in leaves let rays through.
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Mat3, Vec2, Vec3, Vec3A};
 use lightlab_scene::{AlphaMode, Scene, Texture};
 use obvhs::ray::{Ray, RayHit};
 use obvhs::rt_triangle::RtTriangle;
@@ -48,6 +48,8 @@ pub struct Accel {
     alpha_index: Vec<u32>,
     alpha: Vec<AlphaTri>,
     textures: Vec<Texture>,
+    /// Per-instance normal matrices (inverse transpose of the upper 3×3).
+    pub normal_matrices: Vec<Mat3>,
 }
 
 /// A traversal ray. Negative zeros in the direction are made positive (`−0.0 + 0.0 = +0.0`):
@@ -158,6 +160,7 @@ impl Accel {
             alpha_index,
             alpha,
             textures: scene.textures.clone(),
+            normal_matrices: scene.instances.iter().map(|i| i.normal_matrix()).collect(),
         }
     }
 

@@ -110,8 +110,8 @@ pub struct Surface {
     pub material: usize,
 }
 
-/// Reconstruct the surface at a hit.
-pub fn surface(scene: &Scene, hit: &Hit) -> Surface {
+/// Reconstruct the surface at a hit (`accel` built from `scene`).
+pub fn surface(scene: &Scene, accel: &Accel, hit: &Hit) -> Surface {
     let inst = &scene.instances[hit.prim.instance as usize];
     let mesh = &scene.meshes[inst.mesh];
     let t = hit.prim.triangle as usize * 3;
@@ -121,7 +121,7 @@ pub fn surface(scene: &Scene, hit: &Hit) -> Surface {
     let pw = idx.map(|i| inst.transform.transform_point3(mesh.positions[i]));
     let p = pw[0] * b0 + pw[1] * b1 + pw[2] * b2;
     let ng = (pw[1] - pw[0]).cross(pw[2] - pw[0]).normalize_or(Vec3::Y);
-    let nm: Mat3 = inst.normal_matrix();
+    let nm: Mat3 = accel.normal_matrices[hit.prim.instance as usize];
     let n_interp =
         mesh.normals[idx[0]] * b0 + mesh.normals[idx[1]] * b1 + mesh.normals[idx[2]] * b2;
     let mut ns = (nm * n_interp).normalize_or(ng);
@@ -212,7 +212,7 @@ impl<'a> PathTracer<'a> {
                 }
                 break;
             };
-            let sf = surface(scene, &hit);
+            let sf = surface(scene, self.accel, &hit);
             let wo = -d;
             // Emission, seen from the front (or either side if double-sided).
             let mat = &scene.materials[sf.material];
@@ -236,7 +236,14 @@ impl<'a> PathTracer<'a> {
             // Shading frame on the viewer's side.
             let side = if wo.dot(sf.ng) >= 0.0 { 1.0 } else { -1.0 };
             let ng = sf.ng * side;
-            let frame = Frame::from_normal(sf.ns * side);
+            // Where the viewer is below the interpolated normal (grazing views of coarse
+            // meshes) shade with the geometric normal rather than returning black.
+            let ns = if (sf.ns * side).dot(wo) > 1e-4 {
+                sf.ns * side
+            } else {
+                ng
+            };
+            let frame = Frame::from_normal(ns);
             let wo_l = frame.to_local(wo);
             if wo_l.z <= 0.0 {
                 break;

@@ -235,6 +235,11 @@ pub fn torus(name: &str, big: f32, small: f32, nu: u32, nv: u32, material: usize
 
 /// A (p, q) torus knot tube with radial ridges: a detailed shape with deep self-occlusion.
 /// `ridges` sinusoidal grooves run along the tube, with relative depth `ridge_depth`.
+///
+/// The tube's cross-section follows a rotation-minimising (parallel-transported) frame, with the
+/// closing twist of the loop spread evenly along it, so consecutive rings never jump (a frame
+/// built from a fixed helper axis flips where the tangent passes the axis and twists the tube
+/// through itself). Normals are the mesh's area-weighted normals.
 #[allow(clippy::too_many_arguments)]
 pub fn ridged_torus_knot(
     name: &str,
@@ -253,18 +258,101 @@ pub fn ridged_torus_knot(
         let r = 2.0 + (q * a).cos();
         Vec3::new(r * (p * a).cos(), -(q * a).sin(), r * (p * a).sin()) * scale * 0.33
     };
-    parametric(name, nu, nv, material, Vec2::new(16.0, 2.0), move |u, v| {
+    let tangent = |t: f32| (centre(t + 1e-4) - centre(t - 1e-4)).normalize();
+    // Parallel transport of a normal along the closed curve.
+    let mut frames = Vec::with_capacity(nu as usize + 1);
+    let t0 = tangent(0.0);
+    let helper = if t0.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+    let mut n = t0.cross(helper).normalize();
+    for i in 0..=nu {
+        let t = tangent(i as f32 / nu as f32);
+        n = (n - t * t.dot(n)).normalize();
+        frames.push((t, n));
+    }
+    // The transported normal comes back rotated by some angle about the start tangent; unwind
+    // that twist linearly along the loop.
+    let (t_end, n_end) = frames[nu as usize];
+    let n_start = frames[0].1;
+    let twist = t_end.cross(n_end).dot(n_start).atan2(n_end.dot(n_start));
+    let mut m = Mesh {
+        name: name.into(),
+        material,
+        ..Default::default()
+    };
+    for (i, &(t, n)) in frames.iter().enumerate() {
+        let u = i as f32 / nu as f32;
         let c = centre(u);
-        let tangent = (centre(u + 1e-4) - centre(u - 1e-4)).normalize();
-        let helper = if tangent.y.abs() < 0.9 {
-            Vec3::Y
-        } else {
-            Vec3::X
-        };
-        let n1 = tangent.cross(helper).normalize();
-        let n2 = tangent.cross(n1);
-        let b = v * TAU;
-        let radius = tube * (1.0 + ridge_depth * (ridges * b).sin());
-        c + (n1 * b.cos() + n2 * b.sin()) * radius
-    })
+        let rot = glam::Quat::from_axis_angle(t, twist * u);
+        let n1 = rot * n;
+        let n2 = t.cross(n1);
+        for j in 0..=nv {
+            let v = j as f32 / nv as f32;
+            let b = v * TAU;
+            let radius = tube * (1.0 + ridge_depth * (ridges * b).sin());
+            m.positions.push(c + (n1 * b.cos() + n2 * b.sin()) * radius);
+            m.uv0.push(Vec2::new(u * 16.0, v * 2.0));
+        }
+    }
+    let row = nv + 1;
+    for i in 0..nu {
+        for j in 0..nv {
+            let a = i * row + j;
+            let (b, c, d) = (a + row, a + 1, a + row + 1);
+            // Counter-clockwise seen from outside (checked by the signed-volume test).
+            m.indices.extend([a, c, b, b, c, d]);
+        }
+    }
+    m.compute_normals();
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Signed volume by the divergence theorem: positive when faces point outwards.
+    fn signed_volume(m: &Mesh) -> f32 {
+        m.indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    #[test]
+    fn closed_builders_face_outwards_with_the_right_volume() {
+        let cases = [
+            (
+                aabb_box("b", Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0), 0),
+                6.0,
+                1e-5,
+            ),
+            (cylinder("c", 0.5, 2.0, 256, 0), PI * 0.25 * 2.0, 1e-3),
+            (sphere("s", 1.0, 256, 128, 0), 4.0 / 3.0 * PI, 1e-3),
+            (
+                torus("t", 1.0, 0.25, 256, 128, 0),
+                2.0 * PI * PI * 1.0 * 0.0625,
+                1e-3,
+            ),
+        ];
+        for (m, v, tol) in cases {
+            let got = signed_volume(&m);
+            assert!(
+                (got - v).abs() < tol * v.max(1.0) * 10.0,
+                "{}: volume {got} vs {v}",
+                m.name
+            );
+        }
+        let knot = ridged_torus_knot("k", 2.0, 3.0, 1.0, 0.22, 7.0, 0.0, 400, 24, 0);
+        assert!(signed_volume(&knot) > 0.0, "knot faces inwards");
+        // Vertex normals agree with the winding (area-weighted), and point away from the tube
+        // axis: check against the face normal of each triangle.
+        for t in knot.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| knot.positions[i as usize]);
+            let f = (b - a).cross(c - a).normalize();
+            assert!(knot.normals[t[0] as usize].dot(f) > 0.5);
+        }
+    }
 }

@@ -609,8 +609,8 @@ fn bush() -> Scene {
     s
 }
 
-/// The PRT scene: a ridged (2,3) torus knot of ≈86k triangles and a coarse 3.6k-triangle
-/// re-tessellation of the same surface beside it, on a plane, under a low-frequency environment.
+/// The PRT scene: a ridged (2,3) torus knot of ≈86k triangles and a coarse 4.8k-triangle
+/// copy of its tube beside it, on a plane, under a low-frequency environment.
 fn prt() -> Scene {
     let mut s = Scene::default();
     let plane = s.add_material(Material::diffuse("plane", Vec3::splat(0.6)));

@@ -1,0 +1,158 @@
+//! `lightlab demo`: the main job. Renders every built-in scene with every technique built so far
+//! and writes `DIR/report.html` with the images, errors against the reference, timings and
+//! settings. Each later technique adds its rows here.
+
+use crate::render::render_reference;
+use anyhow::{Context, Result};
+use clap::ValueEnum;
+use lightlab_core::image::{LdrSettings, write_atomic};
+use lightlab_trace::RenderSettings;
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+#[derive(Clone, Copy, ValueEnum, Debug, PartialEq)]
+pub enum Quality {
+    Low,
+    High,
+}
+
+/// Image size and samples per scene at each quality. `low` is sized for about five minutes on
+/// a 2-core machine in total.
+fn settings_for(scene: &str, q: Quality) -> RenderSettings {
+    let (w, h, spp) = match (scene, q) {
+        ("cornell", Quality::Low) => (256, 256, 96),
+        ("cornell", Quality::High) => (512, 512, 1024),
+        ("bush", Quality::Low) => (256, 256, 48),
+        ("prt", Quality::Low) => (320, 240, 48),
+        (_, Quality::Low) => (320, 240, 64),
+        (_, Quality::High) => (640, 480, 1024),
+    };
+    RenderSettings {
+        width: w,
+        height: h,
+        spp,
+        max_depth: 16,
+        seed: 1,
+        ..Default::default()
+    }
+}
+
+struct Row {
+    scene: String,
+    technique: String,
+    file: String,
+    settings: RenderSettings,
+    seconds: f64,
+    triangles: usize,
+}
+
+pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let names: Vec<&str> = if only.is_empty() {
+        lightlab_scene::builtin::NAMES.to_vec()
+    } else {
+        for n in only {
+            anyhow::ensure!(
+                lightlab_scene::builtin::NAMES.contains(&n.as_str()),
+                "unknown built-in scene '{n}' (see `lightlab scenes`)"
+            );
+        }
+        only.iter().map(|s| s.as_str()).collect()
+    };
+    let start = Instant::now();
+    let mut rows = vec![];
+    for name in names {
+        let scene = lightlab_scene::builtin::builtin(name).expect("built-in");
+        for technique in ["reference", "direct"] {
+            let mut settings = settings_for(name, quality);
+            if technique == "direct" {
+                settings.spp = (settings.spp / 2).max(8);
+            }
+            let t = Instant::now();
+            let img = render_reference(&scene, technique, &settings)?;
+            let seconds = t.elapsed().as_secs_f64();
+            let file = format!("{name}-{technique}");
+            img.write(&out.join(format!("{file}.exr")), LdrSettings::default())?;
+            img.write(&out.join(format!("{file}.png")), LdrSettings::default())?;
+            eprintln!(
+                "{name:<8} {technique:<10} {:>4}×{:<4} {:>5} spp {seconds:>7.1} s",
+                settings.width, settings.height, settings.spp
+            );
+            rows.push(Row {
+                scene: name.into(),
+                technique: technique.into(),
+                file,
+                settings,
+                seconds,
+                triangles: scene.triangle_count(),
+            });
+        }
+    }
+    let total = start.elapsed().as_secs_f64();
+    let report = out.join("report.html");
+    let html = report_html(&rows, quality, total);
+    write_atomic(&report, |mut f| -> Result<()> {
+        Ok(f.write_all(html.as_bytes())?)
+    })?;
+    println!("report: {}", report.display());
+    Ok(())
+}
+
+fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
+    let mut h = String::new();
+    h.push_str("<!doctype html><html><head><meta charset=\"utf-8\"><title>lightlab demo</title><style>\
+        body{font-family:sans-serif;margin:2em;max-width:1400px}table{border-collapse:collapse}\
+        td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}th{background:#eee}\
+        figure{display:inline-block;margin:0 1em 1em 0}figcaption{font-size:90%}</style></head><body>");
+    h.push_str("<h1>lightlab demo report</h1>");
+    h.push_str(&format!(
+        "<p>lightlab {} · quality <b>{:?}</b> · {} threads · total {:.1} s. Technique <code>reference</code> is the \
+         path-traced ground truth (unidirectional, NEE + MIS, Russian roulette), <code>direct</code> its direct-light-only \
+         variant. Images are linear EXR beside each PNG (filmic tone curve, exposure 1).</p>",
+        env!("CARGO_PKG_VERSION"),
+        quality,
+        rayon::current_num_threads(),
+        total
+    ));
+    let mut scene = "";
+    for r in rows {
+        if r.scene != scene {
+            scene = &r.scene;
+            h.push_str(&format!(
+                "<h2>{}</h2><p>{} · {} triangles</p>",
+                r.scene,
+                lightlab_scene::builtin::describe(&r.scene).unwrap_or(""),
+                r.triangles
+            ));
+        }
+        h.push_str(&format!(
+            "<figure><img src=\"{f}.png\" width=\"{w}\"><figcaption><b>{t}</b> · {w}×{hh} · {spp} spp · max depth {d} · \
+             seed {seed} · {s:.1} s · <a href=\"{f}.exr\">EXR</a></figcaption></figure>",
+            f = r.file,
+            w = r.settings.width,
+            hh = r.settings.height,
+            t = r.technique,
+            spp = r.settings.spp,
+            d = if r.technique == "direct" { 1 } else { r.settings.max_depth },
+            seed = r.settings.seed,
+            s = r.seconds
+        ));
+    }
+    h.push_str("<h2>Timings</h2><table><tr><th>scene</th><th>technique</th><th>size</th><th>spp</th><th>seconds</th><th>Msamples/s</th></tr>");
+    for r in rows {
+        let samples = r.settings.width as f64 * r.settings.height as f64 * r.settings.spp as f64;
+        h.push_str(&format!(
+            "<tr><td>{}</td><td>{}</td><td>{}×{}</td><td>{}</td><td>{:.2}</td><td>{:.2}</td></tr>",
+            r.scene,
+            r.technique,
+            r.settings.width,
+            r.settings.height,
+            r.settings.spp,
+            r.seconds,
+            samples / r.seconds / 1e6
+        ));
+    }
+    h.push_str("</table></body></html>\n");
+    h
+}

@@ -1,0 +1,148 @@
+//! `lightlab render`: one image of a scene with a technique.
+
+use crate::{ToneArg, load_scene, not_implemented};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use lightlab_core::image::{Image, LdrSettings};
+use lightlab_scene::Scene;
+use lightlab_trace::{Accel, PathTracer, RenderSettings};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Techniques `lightlab render` knows of, with whether they are built yet.
+pub const TECHNIQUES: [(&str, bool); 2] = [("reference", true), ("direct", true)];
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// A built-in scene name or a .gltf/.glb path.
+    #[arg(long)]
+    pub scene: String,
+    /// `reference` (path-traced ground truth) or `direct` (direct light only).
+    #[arg(long, default_value = "reference")]
+    pub technique: String,
+    /// Folder of baked data, for techniques that use it.
+    #[arg(long)]
+    pub baked: Option<PathBuf>,
+    #[arg(long, default_value_t = 256)]
+    pub width: u32,
+    /// Defaults to the width divided by the camera's aspect ratio of 1 (square).
+    #[arg(long)]
+    pub height: Option<u32>,
+    #[arg(long, default_value_t = 64)]
+    pub spp: u32,
+    /// Largest number of scattering events per path.
+    #[arg(long, default_value_t = 16)]
+    pub max_depth: u32,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Scene camera index.
+    #[arg(long, default_value_t = 0)]
+    pub camera: usize,
+    /// Exposure multiplier for PNG output.
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
+    #[arg(long, value_enum, default_value_t = ToneArg::Filmic)]
+    pub tonemap: ToneArg,
+    /// Drop zero-area triangles of glTF input instead of rejecting the file.
+    #[arg(long)]
+    pub drop_degenerate: bool,
+    /// Print one JSON object with the timings as the last line.
+    #[arg(long)]
+    pub json: bool,
+    /// Output image: .exr (linear) or .png (tone-mapped sRGB).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Render with the reference path tracer (technique `reference` or `direct`), with a progress
+/// bar on stderr.
+pub fn render_reference(
+    scene: &Scene,
+    technique: &str,
+    settings: &RenderSettings,
+) -> Result<Image> {
+    let mut s = settings.clone();
+    if technique == "direct" {
+        s.max_depth = 1;
+    }
+    let accel = Accel::new(scene);
+    let pt = PathTracer::new(scene, &accel);
+    let bar = ProgressBar::new(s.height as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} rows, {elapsed} (eta {eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(format!("{} {}", scene.name, technique));
+    let img = pt.render(&s, &|done, _| {
+        bar.set_position(done as u64);
+        true
+    })?;
+    bar.finish_and_clear();
+    Ok(img)
+}
+
+pub fn run(a: RenderArgs) -> Result<()> {
+    let known = TECHNIQUES.iter().find(|(t, _)| *t == a.technique);
+    match known {
+        None => bail!(
+            "unknown technique '{}' (known: {})",
+            a.technique,
+            TECHNIQUES
+                .iter()
+                .map(|t| t.0)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        Some((_, false)) => return Err(not_implemented(format!("technique '{}'", a.technique))),
+        Some(_) => {}
+    }
+    let ext = lightlab_core::image::extension(&a.output);
+    if ext != "exr" && ext != "png" {
+        bail!("{}: the output must be .exr or .png", a.output.display());
+    }
+    let scene = load_scene(&a.scene, a.drop_degenerate)?;
+    let settings = RenderSettings {
+        width: a.width,
+        height: a.height.unwrap_or(a.width),
+        spp: a.spp,
+        max_depth: a.max_depth,
+        min_depth: 0,
+        seed: a.seed,
+        camera: a.camera,
+    };
+    settings.validate()?;
+    let t0 = Instant::now();
+    let img = render_reference(&scene, &a.technique, &settings)?;
+    let secs = t0.elapsed().as_secs_f64();
+    img.write(
+        &a.output,
+        LdrSettings {
+            exposure: a.exposure,
+            tone: a.tonemap.into(),
+        },
+    )
+    .with_context(|| format!("writing {}", a.output.display()))?;
+    let paths = settings.width as f64 * settings.height as f64 * settings.spp as f64;
+    eprintln!(
+        "wrote {} ({}×{}, {} spp, {:.2} s, {:.2} Msamples/s)",
+        a.output.display(),
+        settings.width,
+        settings.height,
+        settings.spp,
+        secs,
+        paths / secs / 1e6
+    );
+    if a.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "scene": scene.name, "technique": a.technique, "width": settings.width,
+                "height": settings.height, "spp": settings.spp, "seconds": secs,
+                "msamples_per_s": paths / secs / 1e6,
+            })
+        );
+    }
+    Ok(())
+}
