@@ -8,7 +8,7 @@
 use crate::{load_scene, not_implemented};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use lightlab_core::sampling::{Frame, Rng, cosine_hemisphere};
 use lightlab_trace::Accel;
 use lightlab_trace::accel::RayQuery;
@@ -94,12 +94,52 @@ fn mrays(accel: &Accel, rays: &[RayQuery], threads: usize) -> Result<f64> {
     Ok(rays.len() as f64 / best / 1e6)
 }
 
+/// Write the world-space triangles and both ray sets as little-endian f32 arrays (triangles:
+/// 9 floats each; rays: origin and direction, 6 floats each) for peer benchmarks.
+fn dump(
+    dir: &std::path::Path,
+    scene: &lightlab_scene::Scene,
+    primary: &[RayQuery],
+    secondary: &[RayQuery],
+) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut tris: Vec<f32> = Vec::with_capacity(scene.triangle_count() * 9);
+    for inst in &scene.instances {
+        let m = &scene.meshes[inst.mesh];
+        for &i in &m.indices {
+            tris.extend(
+                inst.transform
+                    .transform_point3(m.positions[i as usize])
+                    .to_array(),
+            );
+        }
+    }
+    let write = |name: &str, data: &[f32]| -> Result<()> {
+        let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
+        lightlab_core::image::write_atomic(&dir.join(name), |mut f| -> Result<()> {
+            use std::io::Write;
+            Ok(f.write_all(&bytes)?)
+        })
+    };
+    let rays = |r: &[RayQuery]| -> Vec<f32> {
+        r.iter()
+            .flat_map(|q| q.origin.to_array().into_iter().chain(q.dir.to_array()))
+            .collect()
+    };
+    write("triangles.f32", &tris)?;
+    write("primary.f32", &rays(primary))?;
+    write("secondary.f32", &rays(secondary))?;
+    Ok(())
+}
+
 pub fn run(
     kind: BenchKind,
     scene: &str,
     json: bool,
     technique: Option<String>,
     n: usize,
+    dump_dir: Option<std::path::PathBuf>,
+    opaque: bool,
 ) -> Result<()> {
     match kind {
         BenchKind::Bake => {
@@ -123,9 +163,12 @@ pub fn run(
     );
     let s = load_scene(scene, false)?;
     let t = Instant::now();
-    let accel = Accel::new(&s);
+    let accel = Accel::with_alpha_test(&s, !opaque);
     let build = t.elapsed().as_secs_f64();
     let (primary, secondary) = ray_sets(&s, &accel, n)?;
+    if let Some(dir) = &dump_dir {
+        dump(dir, &s, &primary, &secondary)?;
+    }
     let all = rayon::current_num_threads();
     let c1 = mrays(&accel, &primary, 1)?;
     let cn = mrays(&accel, &primary, all)?;
@@ -149,6 +192,7 @@ pub fn run(
         println!(
             "{}",
             serde_json::json!({
+                "alpha_test": !opaque,
                 "scene": s.name, "triangles": accel.triangle_count(), "build_s": build, "rays": n,
                 "threads": all,
                 "coherent_mrays_1t": c1, "coherent_mrays_mt": cn,
@@ -156,6 +200,5 @@ pub fn run(
             })
         );
     }
-    let _ = Vec3::ZERO;
     Ok(())
 }

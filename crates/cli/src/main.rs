@@ -90,6 +90,12 @@ enum Command {
         /// Rays per measurement, for `bench trace`.
         #[arg(long, default_value_t = 1_000_000)]
         rays: usize,
+        /// Also write the triangles and rays of `bench trace` to this folder (for peers).
+        #[arg(long)]
+        dump: Option<PathBuf>,
+        /// `bench trace`: ignore alpha (treat alpha-tested triangles as opaque).
+        #[arg(long)]
+        opaque: bool,
     },
     /// Interactive viewer.
     View {
@@ -225,7 +231,9 @@ fn run(cli: Cli) -> Result<()> {
             json,
             technique,
             rays,
-        } => bench::run(what, &scene, json, technique, rays),
+            dump,
+            opaque,
+        } => bench::run(what, &scene, json, technique, rays, dump, opaque),
         Command::View { scene } => {
             load_scene(&scene, false)?;
             Err(not_implemented(

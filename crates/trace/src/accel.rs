@@ -93,8 +93,14 @@ pub struct RayQuery {
 }
 
 impl Accel {
-    /// Build the BVH of all instances of `scene` (PLOC, medium quality, parallel).
+    /// Build the BVH of all instances of `scene` (PLOC with pre-splits, parallel).
     pub fn new(scene: &Scene) -> Accel {
+        Self::with_alpha_test(scene, true)
+    }
+
+    /// As [`Accel::new`]; `alpha_test = false` treats every triangle as opaque (for
+    /// like-for-like benchmarks against ray casters that do no alpha test).
+    pub fn with_alpha_test(scene: &Scene, alpha_test: bool) -> Accel {
         let mut tris = Vec::with_capacity(scene.triangle_count());
         let mut prims = Vec::with_capacity(tris.capacity());
         let mut alpha_of: Vec<Option<AlphaTri>> = Vec::with_capacity(tris.capacity());
@@ -102,6 +108,7 @@ impl Accel {
             let mesh = &scene.meshes[inst.mesh];
             let mat = &scene.materials[mesh.material];
             let cutoff = match mat.alpha_mode {
+                _ if !alpha_test => None,
                 AlphaMode::Opaque => None,
                 AlphaMode::Mask { cutoff } => Some(cutoff),
                 AlphaMode::Blend => Some(0.5),
@@ -129,7 +136,7 @@ impl Accel {
         }
         let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
             &tris,
-            BvhBuildParams::medium_build(),
+            BvhBuildParams::slow_build(),
             &mut std::time::Duration::default(),
         );
         // Reorder the primitives into BVH order.

@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Ray-casting throughput of lightlab against Embree (the `embreex` package) on the same geometry.
+
+For each scene, the built-in scene is exported to glTF, `lightlab bench trace` loads that file,
+measures closest-hit Mrays/s (coherent primary rays, incoherent diffuse bounce rays; 1 thread and
+all threads) and dumps its triangles and rays; Embree then casts exactly the same rays against
+exactly the same triangles, single-threaded (embreex runs one rtcIntersect per ray in one thread,
+its per-ray Python-side loop included). Printed: lightlab/Embree per ray kind. Target (issue 2):
+>= 0.5x Embree's single-thread throughput on incoherent rays.
+
+Usage: python3 bench/trace_vs_embree.py [--scenes cornell,bush,prt] [--rays N] [--json]
+Installs embreex and numpy into a private virtual environment (bench/.venv) on first use.
+Both sides treat every triangle as opaque (`lightlab bench trace --opaque`); lightlab's figure
+with its alpha test (the leaves of `bush`) is printed beside for reference.
+"""
+import argparse, json, os, subprocess, sys, tempfile, time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+VENV = os.path.join(ROOT, "bench", ".venv")
+
+
+def ensure_venv(packages):
+    py = os.path.join(VENV, "bin", "python")
+    if not os.path.exists(py):
+        subprocess.check_call([sys.executable, "-m", "venv", VENV])
+    subprocess.check_call([py, "-m", "pip", "install", "-q", *packages])
+    return py
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--scenes", default="cornell,bush,prt")
+    ap.add_argument("--rays", type=int, default=1_000_000)
+    ap.add_argument("--json", action="store_true")
+    ap.add_argument("--inner", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--dir", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.inner:
+        return embree_inner(args.dir)
+    py = ensure_venv(["embreex", "numpy"])
+    subprocess.check_call(["cargo", "build", "--release", "-q", "-p", "lightlab"], cwd=ROOT)
+    exe = os.path.join(ROOT, "target", "release", "lightlab")
+    results = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for scene in args.scenes.split(","):
+            glb = os.path.join(tmp, f"{scene}.glb")
+            subprocess.check_call([exe, "export", "--scene", scene, "-o", glb], stderr=subprocess.DEVNULL)
+            d = os.path.join(tmp, scene)
+            out = subprocess.check_output([exe, "bench", "trace", "--scene", glb, "--rays", str(args.rays), "--json", "--dump", d, "--opaque"])
+            ours = json.loads(out.decode().strip().splitlines()[-1])
+            alpha = json.loads(subprocess.check_output([exe, "bench", "trace", "--scene", glb, "--rays", str(args.rays), "--json"]).decode().strip().splitlines()[-1])
+            theirs = json.loads(subprocess.check_output([py, __file__, "--inner", "--dir", d]).decode().strip().splitlines()[-1])
+            r = {
+                "scene": scene,
+                "triangles": ours["triangles"],
+                "lightlab_coherent_1t": ours["coherent_mrays_1t"],
+                "lightlab_incoherent_1t": ours["incoherent_mrays_1t"],
+                "lightlab_coherent_mt": ours["coherent_mrays_mt"],
+                "lightlab_incoherent_mt": ours["incoherent_mrays_mt"],
+                "lightlab_alpha_incoherent_1t": alpha["incoherent_mrays_1t"],
+                "embree_coherent_1t": theirs["coherent"],
+                "embree_incoherent_1t": theirs["incoherent"],
+            }
+            r["ratio_coherent_1t"] = r["lightlab_coherent_1t"] / r["embree_coherent_1t"]
+            r["ratio_incoherent_1t"] = r["lightlab_incoherent_1t"] / r["embree_incoherent_1t"]
+            results.append(r)
+    print(f"{'scene':<9} {'tris':>8} | {'Mrays/s 1 thread: lightlab / Embree (ratio)':<48} | lightlab all threads")
+    for r in results:
+        print(f"{r['scene']:<9} {r['triangles']:>8} | coherent {r['lightlab_coherent_1t']:6.2f} / {r['embree_coherent_1t']:6.2f} ({r['ratio_coherent_1t']:.2f}x)"
+              f"  incoherent {r['lightlab_incoherent_1t']:6.2f} / {r['embree_incoherent_1t']:6.2f} ({r['ratio_incoherent_1t']:.2f}x)"
+              f" | {r['lightlab_coherent_mt']:6.2f} / {r['lightlab_incoherent_mt']:6.2f}"
+              f" | with alpha test: incoherent {r['lightlab_alpha_incoherent_1t']:6.2f}")
+    if args.json:
+        print(json.dumps(results))
+
+
+def embree_inner(d):
+    import numpy as np
+    from embreex import rtcore_scene as rtcs
+    from embreex.mesh_construction import TriangleMesh
+
+    tris = np.fromfile(os.path.join(d, "triangles.f32"), dtype="<f4").reshape(-1, 3, 3)
+    scene = rtcs.EmbreeScene()
+    TriangleMesh(scene, tris)
+    out = {}
+    for kind, name in [("coherent", "primary"), ("incoherent", "secondary")]:
+        rays = np.fromfile(os.path.join(d, f"{name}.f32"), dtype="<f4").reshape(-1, 6)
+        o = np.ascontiguousarray(rays[:, :3])
+        dirs = np.ascontiguousarray(rays[:, 3:])
+        scene.run(o[:10000], dirs[:10000], output=1)  # warm-up (also commits the BVH)
+        best = float("inf")
+        for _ in range(3):
+            t = time.perf_counter()
+            scene.run(o, dirs, output=1)
+            best = min(best, time.perf_counter() - t)
+        out[kind] = len(rays) / best / 1e6
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,240 @@
+//! The command-line contract, exercised on the real binary.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn lightlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lightlab"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn scenes_lists_one_name_per_line() {
+    let o = lightlab(&["scenes"]);
+    assert!(o.status.success());
+    let names: Vec<String> = stdout(&o).lines().map(String::from).collect();
+    assert_eq!(
+        names,
+        ["cornell", "room", "shadows", "bush", "prt", "spheres"]
+    );
+}
+
+#[test]
+fn export_then_render_the_glb_then_compare() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("cornell.glb");
+    let o = lightlab(&["export", "--scene", "cornell", "-o", glb.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let a = dir.path().join("a.exr");
+    let b = dir.path().join("b.exr");
+    for (scene, out) in [(glb.to_str().unwrap(), &a), ("cornell", &b)] {
+        let o = lightlab(&[
+            "render",
+            "--scene",
+            scene,
+            "--technique",
+            "reference",
+            "--width",
+            "24",
+            "--spp",
+            "4",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    // The exported scene renders exactly like the built-in one (same seed, same geometry).
+    let o = lightlab(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let last = stdout(&o).lines().last().unwrap().to_string();
+    let v: serde_json::Value = serde_json::from_str(&last).unwrap();
+    assert!(v["rmse"].as_f64().unwrap() < 1e-4, "{last}");
+    assert!(v["relmse"].as_f64().is_some() && v["flip"].as_f64().is_some());
+    // PNG output too.
+    let png = dir.path().join("d.png");
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "spheres",
+        "--technique",
+        "direct",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--spp",
+        "2",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(png.exists());
+}
+
+fn assert_fails_cleanly(args: &[&str], out: &Path, needle: &str) {
+    let o = lightlab(args);
+    assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains(needle), "{args:?}: '{e}' lacks '{needle}'");
+    assert!(!e.contains("panicked"), "{e}");
+    assert!(!out.exists(), "{args:?} left {}", out.display());
+}
+
+#[test]
+fn bad_render_requests_fail_with_clear_errors_and_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr");
+    let o = out.to_str().unwrap();
+    assert_fails_cleanly(
+        &["render", "--scene", "cornell", "--width", "0", "-o", o],
+        &out,
+        "at least 1×1",
+    );
+    assert_fails_cleanly(
+        &["render", "--scene", "cornell", "--spp", "0", "-o", o],
+        &out,
+        "samples per pixel",
+    );
+    assert_fails_cleanly(
+        &[
+            "render", "--scene", "cornell", "--width", "100000", "--height", "100000", "-o", o,
+        ],
+        &out,
+        "exceeds the limit",
+    );
+    assert_fails_cleanly(
+        &["render", "--scene", "nowhere", "-o", o],
+        &out,
+        "unknown scene 'nowhere'",
+    );
+    assert_fails_cleanly(
+        &[
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            "magic",
+            "-o",
+            o,
+        ],
+        &out,
+        "unknown technique",
+    );
+    assert_fails_cleanly(
+        &["render", "--scene", "cornell", "--camera", "3", "-o", o],
+        &out,
+        "no camera 3",
+    );
+    let bmp = dir.path().join("x.bmp");
+    assert_fails_cleanly(
+        &["render", "--scene", "cornell", "-o", bmp.to_str().unwrap()],
+        &bmp,
+        ".exr or .png",
+    );
+    let missing = dir.path().join("missing.glb");
+    assert_fails_cleanly(
+        &["render", "--scene", missing.to_str().unwrap(), "-o", o],
+        &out,
+        "missing.glb",
+    );
+    let broken = dir.path().join("broken.gltf");
+    std::fs::write(&broken, "{ not json").unwrap();
+    assert_fails_cleanly(
+        &["render", "--scene", broken.to_str().unwrap(), "-o", o],
+        &out,
+        "broken.gltf",
+    );
+}
+
+#[test]
+fn compare_rejects_different_sizes_and_unreadable_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.exr");
+    let b = dir.path().join("b.exr");
+    lightlab_core::image::Image::new(4, 4)
+        .write(&a, Default::default())
+        .unwrap();
+    lightlab_core::image::Image::new(4, 5)
+        .write(&b, Default::default())
+        .unwrap();
+    let o = lightlab(&["compare", a.to_str().unwrap(), b.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("differ in size"), "{}", stderr(&o));
+    let junk = dir.path().join("junk.png");
+    std::fs::write(&junk, b"junk").unwrap();
+    let o = lightlab(&["compare", a.to_str().unwrap(), junk.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("junk.png"), "{}", stderr(&o));
+}
+
+#[test]
+fn unbuilt_methods_exit_with_code_2() {
+    for args in [
+        vec!["bake", "--scene", "cornell", "--method", "radiosity"],
+        vec![
+            "bench",
+            "frame",
+            "--scene",
+            "shadows",
+            "--technique",
+            "phong",
+        ],
+        vec!["bench", "bake", "--scene", "cornell"],
+        vec!["view", "--scene", "cornell"],
+    ] {
+        let o = lightlab(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains("not implemented yet"), "{}", stderr(&o));
+    }
+}
+
+#[test]
+fn bench_trace_reports_json() {
+    let o = lightlab(&[
+        "bench", "trace", "--scene", "cornell", "--rays", "20000", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
+    for k in [
+        "coherent_mrays_1t",
+        "coherent_mrays_mt",
+        "incoherent_mrays_1t",
+        "incoherent_mrays_mt",
+    ] {
+        assert!(v[k].as_f64().unwrap() > 0.0, "{k}");
+    }
+}
+
+#[test]
+fn demo_preview_writes_a_report_with_every_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = lightlab(&[
+        "demo",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--quality",
+        "preview",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("report.html"));
+    let html = std::fs::read_to_string(dir.path().join("report.html")).unwrap();
+    for s in ["cornell", "room", "shadows", "bush", "prt", "spheres"] {
+        assert!(html.contains(&format!("{s}-reference.png")), "{s}");
+        assert!(dir.path().join(format!("{s}-reference.exr")).exists());
+    }
+}
