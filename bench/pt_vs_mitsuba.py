@@ -1,0 +1,159 @@
+#!/usr/bin/env python3
+"""Reference path tracing of lightlab against Mitsuba 3 (PyPI `mitsuba`, `scalar_rgb`).
+
+The built-in scene is exported to glTF by lightlab; this script reads that file back (meshes,
+node transforms, diffuse reflectances, emission, the default camera), writes the meshes as PLY
+and renders it with Mitsuba's `path` integrator, box pixel filter, all threads. lightlab renders
+the same exported file with `lightlab render --technique reference`. Printed:
+
+- samples per second of both, all threads, and the ratio (target in issue 2: >= 1.5x);
+- relMSE of lightlab's image against Mitsuba's (an independent check of the reference).
+
+Depth: lightlab counts scattering events (max_depth 1 = direct light); Mitsuba counts path
+segments (max_depth 2 = direct light), so Mitsuba gets lightlab's max depth + 1.
+
+Only what `cornell` uses is translated (diffuse surfaces, area emitters, a perspective camera).
+Usage: python3 bench/pt_vs_mitsuba.py [--scene cornell] [--size 256] [--spp 64] [--max-depth 8] [--json]
+Installs mitsuba and numpy into bench/.venv on first use.
+"""
+import argparse, json, math, os, struct, subprocess, sys, tempfile, time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+VENV = os.path.join(ROOT, "bench", ".venv")
+
+
+def ensure_venv(packages):
+    py = os.path.join(VENV, "bin", "python")
+    if not os.path.exists(py):
+        subprocess.check_call([sys.executable, "-m", "venv", VENV])
+    subprocess.check_call([py, "-m", "pip", "install", "-q", *packages])
+    return py
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--scene", default="cornell")
+    ap.add_argument("--size", type=int, default=256)
+    ap.add_argument("--spp", type=int, default=64)
+    ap.add_argument("--max-depth", type=int, default=8)
+    ap.add_argument("--json", action="store_true")
+    ap.add_argument("--inner", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--gltf", help=argparse.SUPPRESS)
+    ap.add_argument("--out", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.inner:
+        return mitsuba_inner(args)
+    py = ensure_venv(["mitsuba", "numpy"])
+    subprocess.check_call(["cargo", "build", "--release", "-q", "-p", "lightlab"], cwd=ROOT)
+    exe = os.path.join(ROOT, "target", "release", "lightlab")
+    with tempfile.TemporaryDirectory() as tmp:
+        gltf = os.path.join(tmp, f"{args.scene}.gltf")
+        subprocess.check_call([exe, "export", "--scene", args.scene, "-o", gltf], stderr=subprocess.DEVNULL)
+        ours_exr = os.path.join(tmp, "lightlab.exr")
+        out = subprocess.check_output([exe, "render", "--scene", gltf, "--technique", "reference",
+                                       "--width", str(args.size), "--spp", str(args.spp),
+                                       "--max-depth", str(args.max_depth), "--json", "-o", ours_exr],
+                                      stderr=subprocess.DEVNULL)
+        ours = json.loads(out.decode().strip().splitlines()[-1])
+        theirs_exr = os.path.join(tmp, "mitsuba.exr")
+        theirs = json.loads(subprocess.check_output(
+            [py, __file__, "--inner", "--gltf", gltf, "--out", theirs_exr, "--size", str(args.size),
+             "--spp", str(args.spp), "--max-depth", str(args.max_depth)]).decode().strip().splitlines()[-1])
+        cmp = json.loads(subprocess.check_output([exe, "compare", ours_exr, theirs_exr, "--json"]).decode().strip().splitlines()[-1])
+    ours_sps = ours["msamples_per_s"]
+    res = {
+        "scene": args.scene, "size": args.size, "spp": args.spp, "max_depth": args.max_depth,
+        "lightlab_msamples_per_s": ours_sps, "lightlab_seconds": ours["seconds"],
+        "mitsuba_msamples_per_s": theirs["msamples_per_s"], "mitsuba_seconds": theirs["seconds"],
+        "ratio": ours_sps / theirs["msamples_per_s"],
+        "relmse_lightlab_vs_mitsuba": cmp["relmse"], "flip_lightlab_vs_mitsuba": cmp["flip"],
+    }
+    print(f"{args.scene} {args.size}x{args.size}, {args.spp} spp, max depth {args.max_depth} (Mitsuba {args.max_depth + 1}), all threads")
+    print(f"  lightlab {ours_sps:7.3f} Msamples/s ({ours['seconds']:.2f} s)")
+    print(f"  Mitsuba  {theirs['msamples_per_s']:7.3f} Msamples/s ({theirs['seconds']:.2f} s, scalar_rgb)")
+    print(f"  ratio lightlab/Mitsuba {res['ratio']:.2f}x")
+    print(f"  relMSE lightlab vs Mitsuba {cmp['relmse']:.5f}, FLIP {cmp['flip']:.4f}")
+    if args.json:
+        print(json.dumps(res))
+
+
+def read_gltf(path):
+    import numpy as np
+    doc = json.load(open(path))
+    base = os.path.dirname(path)
+    bin_data = open(os.path.join(base, doc["buffers"][0]["uri"]), "rb").read()
+
+    def accessor(i):
+        a = doc["accessors"][i]
+        v = doc["bufferViews"][a["bufferView"]]
+        n = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}[a["type"]]
+        dt = {5126: "<f4", 5125: "<u4"}[a["componentType"]]
+        off = v.get("byteOffset", 0) + a.get("byteOffset", 0)
+        return np.frombuffer(bin_data, dtype=dt, count=a["count"] * n, offset=off).reshape(a["count"], n)
+
+    shapes = []
+    camera = None
+    for node in doc["nodes"]:
+        m = np.array(node.get("matrix", [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]), dtype=np.float64).reshape(4, 4).T
+        if "mesh" in node:
+            prim = doc["meshes"][node["mesh"]]["primitives"][0]
+            pos = accessor(prim["attributes"]["POSITION"]).astype(np.float64)
+            pos = (np.c_[pos, np.ones(len(pos))] @ m.T)[:, :3]
+            idx = accessor(prim["indices"]).reshape(-1, 3)
+            mat = doc["materials"][prim["material"]]
+            albedo = mat["pbrMetallicRoughness"].get("baseColorFactor", [1, 1, 1, 1])[:3]
+            strength = mat.get("extensions", {}).get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0)
+            emission = [e * strength for e in mat.get("emissiveFactor", [0, 0, 0])]
+            shapes.append((pos, idx, albedo, emission))
+        if "camera" in node and camera is None:
+            cam = doc["cameras"][node["camera"]]["perspective"]
+            camera = (m, cam["yfov"])
+    return shapes, camera
+
+
+def write_ply(path, pos, idx):
+    with open(path, "wb") as f:
+        f.write(f"ply\nformat binary_little_endian 1.0\nelement vertex {len(pos)}\nproperty float x\nproperty float y\nproperty float z\n"
+                f"element face {len(idx)}\nproperty list uchar int vertex_indices\nend_header\n".encode())
+        for p in pos:
+            f.write(struct.pack("<3f", *p))
+        for t in idx:
+            f.write(struct.pack("<B3i", 3, *[int(i) for i in t]))
+
+
+def mitsuba_inner(args):
+    import mitsuba as mi
+    import numpy as np
+    mi.set_variant("scalar_rgb")
+    shapes, camera = read_gltf(args.gltf)
+    tmp = os.path.dirname(args.out)
+    scene = {"type": "scene", "integrator": {"type": "path", "max_depth": args.max_depth + 1}}
+    for i, (pos, idx, albedo, emission) in enumerate(shapes):
+        ply = os.path.join(tmp, f"shape{i}.ply")
+        write_ply(ply, pos, idx)
+        s = {"type": "ply", "filename": ply, "face_normals": True,
+             "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(albedo)}}}
+        if max(emission) > 0:
+            s["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": emission}}
+        scene[f"shape{i}"] = s
+    m, yfov = camera
+    eye = m[:3, 3]
+    forward = -m[:3, 2]
+    up = m[:3, 1]
+    scene["sensor"] = {
+        "type": "perspective", "fov": math.degrees(yfov), "fov_axis": "y",
+        "to_world": mi.ScalarTransform4f().look_at(origin=eye.tolist(), target=(eye + forward).tolist(), up=up.tolist()),
+        "film": {"type": "hdrfilm", "width": args.size, "height": args.size, "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+        "sampler": {"type": "independent", "sample_count": args.spp},
+    }
+    sc = mi.load_dict(scene)
+    mi.render(sc, spp=1)  # warm-up
+    t = time.perf_counter()
+    img = mi.render(sc, spp=args.spp)
+    secs = time.perf_counter() - t
+    mi.util.write_bitmap(args.out, img)
+    print(json.dumps({"seconds": secs, "msamples_per_s": args.size * args.size * args.spp / secs / 1e6}))
+
+
+if __name__ == "__main__":
+    main()
