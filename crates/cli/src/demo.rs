@@ -26,11 +26,11 @@ pub enum Quality {
 fn settings_for(scene: &str, q: Quality) -> RenderSettings {
     let (w, h, spp) = match (scene, q) {
         (_, Quality::Preview) => (48, 48, 4),
-        ("cornell", Quality::Low) => (256, 256, 96),
-        ("cornell", Quality::High) => (512, 512, 1024),
-        ("bush", Quality::Low) => (256, 256, 48),
-        ("prt", Quality::Low) => (320, 240, 48),
-        (_, Quality::Low) => (320, 240, 64),
+        ("cornell", Quality::Low) => (256, 256, 256),
+        ("cornell", Quality::High) => (512, 512, 2048),
+        ("room", Quality::Low) => (320, 240, 192),
+        ("spheres", Quality::Low) => (320, 240, 192),
+        (_, Quality::Low) => (320, 240, 128),
         (_, Quality::High) => (640, 480, 1024),
     };
     RenderSettings {

@@ -44,6 +44,13 @@ pub struct RenderArgs {
     pub exposure: f32,
     #[arg(long, value_enum, default_value_t = ToneArg::Filmic)]
     pub tonemap: ToneArg,
+    /// Light the scene with this equirectangular environment map (.hdr or .exr), replacing any
+    /// environment the scene has.
+    #[arg(long)]
+    pub env: Option<PathBuf>,
+    /// Multiplier on `--env`.
+    #[arg(long, default_value_t = 1.0)]
+    pub env_intensity: f32,
     /// Drop zero-area triangles of glTF input instead of rejecting the file.
     #[arg(long)]
     pub drop_degenerate: bool,
@@ -102,7 +109,18 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if ext != "exr" && ext != "png" {
         bail!("{}: the output must be .exr or .png", a.output.display());
     }
-    let scene = load_scene(&a.scene, a.drop_degenerate)?;
+    let mut scene = load_scene(&a.scene, a.drop_degenerate)?;
+    if let Some(env) = &a.env {
+        anyhow::ensure!(
+            a.env_intensity.is_finite() && a.env_intensity >= 0.0,
+            "--env-intensity must be a finite, non-negative number"
+        );
+        let image = Image::read(env)?;
+        scene.environment = Some(lightlab_scene::Environment {
+            image,
+            intensity: a.env_intensity,
+        });
+    }
     let settings = RenderSettings {
         width: a.width,
         height: a.height.unwrap_or(a.width),

@@ -65,6 +65,34 @@ fn export_then_render_the_glb_then_compare() {
     let v: serde_json::Value = serde_json::from_str(&last).unwrap();
     assert!(v["rmse"].as_f64().unwrap() < 1e-4, "{last}");
     assert!(v["relmse"].as_f64().is_some() && v["flip"].as_f64().is_some());
+    // An environment map from a file lights the scene: a uniform white sky seen directly.
+    let env = dir.path().join("sky.exr");
+    lightlab_core::image::Image::from_fn(8, 4, |_, _| glam::Vec3::splat(0.25))
+        .write(&env, Default::default())
+        .unwrap();
+    let lit = dir.path().join("lit.exr");
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "spheres",
+        "--env",
+        env.to_str().unwrap(),
+        "--env-intensity",
+        "2",
+        "--width",
+        "8",
+        "--spp",
+        "1",
+        "-o",
+        lit.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = lightlab_core::image::Image::read(&lit).unwrap();
+    assert!(
+        (img.get(0, 0) - glam::Vec3::splat(0.5)).abs().max_element() < 1e-6,
+        "top-left pixel sees the sky: {}",
+        img.get(0, 0)
+    );
     // PNG output too.
     let png = dir.path().join("d.png");
     let o = lightlab(&[

@@ -181,8 +181,15 @@ pub fn uniform_hemisphere(u: Vec2) -> Vec3 {
 /// Uniform direction in the cone of half-angle acos(`cos_max`) around +z;
 /// pdf = 1/(2π(1−cos_max)).
 pub fn uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
-    let z = 1.0 - u.x * (1.0 - cos_max);
-    let r = (1.0 - z * z).max(0.0).sqrt();
+    uniform_cone_1mc(u, 1.0 - cos_max)
+}
+
+/// [`uniform_cone`] from `1 − cos_max` given directly. For tiny cones (the sun: 1 − cos ≈ 1e-5)
+/// `1 − cos` computed in f32 loses half its digits; pass `2·sin²(α/2)` instead.
+pub fn uniform_cone_1mc(u: Vec2, one_minus_cos_max: f32) -> Vec3 {
+    let one_minus_z = u.x * one_minus_cos_max;
+    let z = 1.0 - one_minus_z;
+    let r = (one_minus_z * (2.0 - one_minus_z)).max(0.0).sqrt();
     let phi = 2.0 * PI * u.y;
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }

@@ -71,6 +71,10 @@ pub fn import(path: &Path, opts: LoadOptions) -> Result<Scene, SceneError> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     crate::validate::validate(&mut scene, path, opts)?;
+    if scene.cameras.is_empty() {
+        // Files without a camera still render: frame the scene.
+        scene.cameras.extend(scene.framing_camera());
+    }
     Ok(scene)
 }
 

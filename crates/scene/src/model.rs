@@ -382,6 +382,40 @@ impl Camera {
 }
 
 impl Scene {
+    /// World-space bounds of all instances (min, max); None for an empty scene.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for inst in &self.instances {
+            for p in &self.meshes[inst.mesh].positions {
+                let w = inst.transform.transform_point3(*p);
+                lo = lo.min(w);
+                hi = hi.max(w);
+            }
+        }
+        (lo.x <= hi.x).then_some((lo, hi))
+    }
+
+    /// A camera that frames the whole scene from the front-right and above (for files that
+    /// bring no camera), with a 45° vertical field of view.
+    pub fn framing_camera(&self) -> Option<Camera> {
+        let (lo, hi) = self.bounds()?;
+        let centre = (lo + hi) * 0.5;
+        let radius = ((hi - lo).length() * 0.5).max(1e-3);
+        let yfov = 45f32.to_radians();
+        let dist = radius / (yfov * 0.5).sin();
+        let dir = Vec3::new(0.5, 0.45, 1.0).normalize();
+        let mut c = Camera::look_at(
+            "lightlab_framing",
+            centre + dir * dist,
+            centre,
+            Vec3::Y,
+            yfov,
+        );
+        c.znear = (dist - radius).max(1e-3) * 0.5;
+        Some(c)
+    }
+
     pub fn default_camera(&self) -> Option<&Camera> {
         self.cameras.first()
     }

@@ -207,11 +207,16 @@ fn load_err(p: &Path) -> String {
 }
 
 #[test]
-fn a_good_minimal_file_loads() {
+fn a_good_minimal_file_loads_and_gets_a_framing_camera() {
     let dir = tempfile::tempdir().unwrap();
     let p = triangle_file(dir.path(), "good", GOOD, true, |_| {});
     let s = load(p.to_str().unwrap(), LoadOptions::default()).unwrap();
     assert_eq!(s.triangle_count(), 1);
+    // The file has no camera: one framing the triangle is added, looking at its centre.
+    let cam = s.default_camera().unwrap();
+    let centre = Vec3::new(0.5, 0.5, 0.0);
+    let d = cam.ray_direction(glam::Vec2::ZERO, 1.0);
+    assert!((d - (centre - cam.position()).normalize()).length() < 1e-5);
 }
 
 #[test]

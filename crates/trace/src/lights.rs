@@ -5,7 +5,7 @@
 use glam::{Vec2, Vec3};
 use lightlab_core::color::luminance;
 use lightlab_core::sampling::{
-    Distribution1D, Distribution2D, Frame, uniform_cone, uniform_triangle,
+    Distribution1D, Distribution2D, Frame, uniform_cone_1mc, uniform_triangle,
 };
 use lightlab_scene::{Environment, LightKind, Scene};
 use std::f32::consts::PI;
@@ -233,12 +233,12 @@ pub fn sample_punctual(scene: &Scene, i: usize, p: Vec3, u: Vec2) -> Option<Ligh
                     pdf: 0.0,
                 });
             }
-            let cos_max = half.cos();
-            let local = uniform_cone(u, cos_max);
+            // 1 − cos α = 2 sin²(α/2), exact in f32 even for the sun's 1e-5.
+            let one_minus_cos = 2.0 * (half * 0.5).sin().powi(2);
+            let local = uniform_cone_1mc(u, one_minus_cos);
             let wi = Frame::from_normal(to_sun).to_world(local);
-            // radiance / pdf = E/(π sin²α) · 2π(1 − cos α)
-            let sin2 = half.sin().powi(2);
-            let value = l.color * l.intensity * (2.0 * (1.0 - cos_max) / sin2);
+            // radiance / pdf = E/(π sin²α) · 2π(1 − cos α) = E / cos²(α/2)
+            let value = l.color * l.intensity / (half * 0.5).cos().powi(2);
             Some(LightSample {
                 wi,
                 dist: f32::INFINITY,
