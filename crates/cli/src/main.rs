@@ -6,6 +6,7 @@
 mod bench;
 mod demo;
 mod render;
+mod sh_cmd;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
@@ -97,6 +98,9 @@ enum Command {
         #[arg(long)]
         opaque: bool,
     },
+    /// Spherical harmonics of environment maps: coefficients and irradiance maps.
+    #[command(subcommand)]
+    Sh(sh_cmd::ShCommand),
     /// Interactive viewer.
     View {
         #[arg(long)]
@@ -234,6 +238,7 @@ fn run(cli: Cli) -> Result<()> {
             dump,
             opaque,
         } => bench::run(what, &scene, json, technique, rays, dump, opaque),
+        Command::Sh(cmd) => sh_cmd::run(cmd),
         Command::View { scene } => {
             load_scene(&scene, false)?;
             Err(not_implemented(

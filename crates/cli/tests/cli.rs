@@ -266,3 +266,66 @@ fn demo_preview_writes_a_report_with_every_scene() {
         assert!(dir.path().join(format!("{s}-reference.exr")).exists());
     }
 }
+
+#[test]
+fn sh_project_and_irradiance() {
+    let dir = tempfile::tempdir().unwrap();
+    let env = dir.path().join("sky.exr");
+    // A constant lat-long sky of radiance 0.5: L00 = 2√π·0.5, irradiance π·0.5 everywhere.
+    lightlab_core::image::Image::from_fn(64, 32, |_, _| glam::Vec3::splat(0.5))
+        .write(&env, Default::default())
+        .unwrap();
+    let o = lightlab(&[
+        "sh",
+        "project",
+        "--env",
+        env.to_str().unwrap(),
+        "--bands",
+        "3",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
+    let l00 = v["coefficients"][0][0].as_f64().unwrap();
+    assert!((l00 - std::f64::consts::PI.sqrt()).abs() < 1e-6, "{l00}");
+    assert_eq!(v["coefficients"].as_array().unwrap().len(), 9);
+    let out = dir.path().join("irr.exr");
+    let o = lightlab(&[
+        "sh",
+        "irradiance",
+        "--env",
+        env.to_str().unwrap(),
+        "--width",
+        "16",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let irr = lightlab_core::image::Image::read(&out).unwrap();
+    assert_eq!((irr.width, irr.height), (16, 8));
+    // Texel-centre sampling of a 64×32 map leaves L20 ≈ 1e-3·L00 (O(texel²)): 1e-3 relative.
+    for p in &irr.data {
+        assert!(
+            (p.x as f64 / (std::f64::consts::PI * 0.5) - 1.0).abs() < 1e-3,
+            "{p}"
+        );
+    }
+    // Bad requests.
+    let bad = lightlab(&[
+        "sh",
+        "project",
+        "--env",
+        env.to_str().unwrap(),
+        "--bands",
+        "0",
+    ]);
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(stderr(&bad).contains("--bands"));
+    let odd = dir.path().join("odd.exr");
+    lightlab_core::image::Image::new(30, 7)
+        .write(&odd, Default::default())
+        .unwrap();
+    let bad = lightlab(&["sh", "project", "--env", odd.to_str().unwrap()]);
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(stderr(&bad).contains("--format"), "{}", stderr(&bad));
+}

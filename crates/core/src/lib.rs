@@ -7,7 +7,10 @@
 //!   count), low-discrepancy sequences, and the direction/area samplers of the path tracer;
 //! - [`image`]: a linear RGB float image with EXR/HDR/PNG reading and *atomic* writing
 //!   (temporary file, then rename: no half-written output on error);
-//! - [`metrics`]: RMSE, relMSE and FLIP between two images.
+//! - [`metrics`]: RMSE, relMSE and FLIP between two images;
+//! - [`sh`]: real spherical harmonics (the basis convention lives there), projection, rotation,
+//!   convolution, windows, triple products; [`sh_env`]: projection of environment maps;
+//! - [`quadrature`]: direction sets (exact Gauss and stratified).
 //!
 //! Conventions (DESIGN.md): right-handed, Y-up, metres; linear Rec.709 RGB radiometry.
 #![forbid(unsafe_code)]
@@ -15,6 +18,9 @@
 pub mod color;
 pub mod image;
 pub mod metrics;
+pub mod quadrature;
 pub mod sampling;
+pub mod sh;
+pub mod sh_env;
 
 pub use glam;

@@ -309,19 +309,14 @@ pub struct Environment {
 }
 
 impl Environment {
-    /// Direction → equirectangular uv in [0,1)².
+    /// Direction → equirectangular uv in [0,1)² (`lightlab_core::sh_env`'s lat-long convention).
     pub fn dir_to_uv(d: Vec3) -> Vec2 {
-        let u = 0.5 + d.x.atan2(-d.z) / (2.0 * std::f32::consts::PI);
-        let v = d.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
-        Vec2::new(u.rem_euclid(1.0), v)
+        lightlab_core::sh_env::latlong_dir_to_uv(d)
     }
 
     /// Equirectangular uv → unit direction.
     pub fn uv_to_dir(uv: Vec2) -> Vec3 {
-        let phi = (uv.x - 0.5) * 2.0 * std::f32::consts::PI;
-        let theta = uv.y * std::f32::consts::PI;
-        let s = theta.sin();
-        Vec3::new(s * phi.sin(), theta.cos(), -s * phi.cos())
+        lightlab_core::sh_env::latlong_uv_to_dir(uv)
     }
 
     /// Radiance arriving from direction `d` (nearest texel; the map is assumed smooth or

@@ -1,0 +1,129 @@
+//! Projection of environment maps onto spherical harmonics, and irradiance maps from them (the
+//! user job of Ramamoorthi–Hanrahan's `prefilter`).
+//!
+//! Formats:
+//! - **lat-long (equirectangular)**, lightlab's environment convention: for a direction d,
+//!   u = 0.5 + atan2(d.x, −d.z)/2π, v = acos(d.y)/π (v = 0 is +Y). Texel (x, y) covers
+//!   Δφ = 2π/W and θ ∈ [πy/H, π(y+1)/H]: solid angle (2π/W)(cos θ₀ − cos θ₁), exact.
+//! - **angular (light probe)**, as in Ramamoorthi–Hanrahan's `prefilter.c`: u, v ∈ [−1, 1]
+//!   (v up), r = √(u²+v²) ≤ 1, θ = π·r, φ = atan2(v, u),
+//!   d = (sin θ cos φ, sin θ sin φ, cos θ); solid angle (2π/W)(2π/H)·sinθ/θ.
+//!   Coefficients of an angular probe are in the probe's own frame, as in their paper.
+//!
+//! Texel values are taken at texel centres, weighted by the texel's solid angle.
+
+use crate::image::Image;
+use crate::sh::{eval_f64, irradiance_from_radiance, num_coeffs};
+use glam::{DVec3, Vec2, Vec3};
+use std::f64::consts::PI;
+
+/// Layout of an environment image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvFormat {
+    LatLong,
+    Angular,
+}
+
+impl EnvFormat {
+    /// Guess from the aspect ratio: 2:1 is lat-long, 1:1 angular.
+    pub fn guess(width: u32, height: u32) -> Option<EnvFormat> {
+        if width == 2 * height {
+            Some(EnvFormat::LatLong)
+        } else if width == height {
+            Some(EnvFormat::Angular)
+        } else {
+            None
+        }
+    }
+}
+
+/// Lat-long: direction → uv in [0,1)².
+pub fn latlong_dir_to_uv(d: Vec3) -> Vec2 {
+    let u = 0.5 + d.x.atan2(-d.z) / (2.0 * std::f32::consts::PI);
+    let v = d.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+    Vec2::new(u.rem_euclid(1.0), v)
+}
+
+/// Lat-long: uv → unit direction.
+pub fn latlong_uv_to_dir(uv: Vec2) -> Vec3 {
+    let phi = (uv.x - 0.5) * 2.0 * std::f32::consts::PI;
+    let theta = uv.y * std::f32::consts::PI;
+    let s = theta.sin();
+    Vec3::new(s * phi.sin(), theta.cos(), -s * phi.cos())
+}
+
+fn latlong_dir_f64(u: f64, v: f64) -> DVec3 {
+    let phi = (u - 0.5) * 2.0 * PI;
+    let theta = v * PI;
+    let s = theta.sin();
+    DVec3::new(s * phi.sin(), theta.cos(), -s * phi.cos())
+}
+
+/// Visit every texel of an environment image with its direction and solid angle.
+pub fn for_each_texel(img: &Image, format: EnvFormat, mut f: impl FnMut(DVec3, f64, Vec3)) {
+    let (w, h) = (img.width as usize, img.height as usize);
+    match format {
+        EnvFormat::LatLong => {
+            for y in 0..h {
+                let (t0, t1) = (PI * y as f64 / h as f64, PI * (y + 1) as f64 / h as f64);
+                let omega = 2.0 * PI / w as f64 * (t0.cos() - t1.cos());
+                let v = (y as f64 + 0.5) / h as f64;
+                for x in 0..w {
+                    let d = latlong_dir_f64((x as f64 + 0.5) / w as f64, v);
+                    f(d, omega, img.data[y * w + x]);
+                }
+            }
+        }
+        EnvFormat::Angular => {
+            for y in 0..h {
+                let v = (h as f64 / 2.0 - (y as f64 + 0.5)) / (h as f64 / 2.0);
+                for x in 0..w {
+                    let u = ((x as f64 + 0.5) - w as f64 / 2.0) / (w as f64 / 2.0);
+                    let r = (u * u + v * v).sqrt();
+                    if r > 1.0 {
+                        continue;
+                    }
+                    let theta = PI * r;
+                    let phi = v.atan2(u);
+                    let st = theta.sin();
+                    let d = DVec3::new(st * phi.cos(), st * phi.sin(), theta.cos());
+                    let sinc = if theta > 0.0 { st / theta } else { 1.0 };
+                    let omega = (2.0 * PI / w as f64) * (2.0 * PI / h as f64) * sinc;
+                    f(d, omega, img.data[y * w + x]);
+                }
+            }
+        }
+    }
+}
+
+/// RGB SH coefficients of an environment image.
+pub fn project_env(img: &Image, format: EnvFormat, bands: usize) -> Vec<DVec3> {
+    let mut c = vec![DVec3::ZERO; num_coeffs(bands)];
+    let mut y = vec![0.0; num_coeffs(bands)];
+    for_each_texel(img, format, |d, omega, v| {
+        eval_f64(bands, d.x, d.y, d.z, &mut y);
+        let v = v.as_dvec3() * omega;
+        for (ci, yi) in c.iter_mut().zip(&y) {
+            *ci += v * *yi;
+        }
+    });
+    c
+}
+
+/// A lat-long irradiance map (irradiance E, W/m²) of `width × width/2` from radiance
+/// coefficients: convolution with the clamped cosine, then evaluation per texel.
+pub fn irradiance_map(radiance: &[DVec3], width: u32) -> Image {
+    let e = irradiance_from_radiance(radiance);
+    let bands = crate::sh::bands_of(e.len());
+    let height = (width / 2).max(1);
+    let mut y = vec![0.0; num_coeffs(bands)];
+    Image::from_fn(width, height, |x, yy| {
+        let d = latlong_dir_f64(
+            (x as f64 + 0.5) / width as f64,
+            (yy as f64 + 0.5) / height as f64,
+        );
+        eval_f64(bands, d.x, d.y, d.z, &mut y);
+        let v: DVec3 = e.iter().zip(&y).map(|(c, b)| *c * *b).sum();
+        v.as_vec3()
+    })
+}
