@@ -10,7 +10,9 @@
 //! - [`metrics`]: RMSE, relMSE and FLIP between two images;
 //! - [`sh`]: real spherical harmonics (the basis convention lives there), projection, rotation,
 //!   convolution, windows, triple products; [`sh_env`]: projection of environment maps;
-//! - [`quadrature`]: direction sets (exact Gauss and stratified).
+//! - [`quadrature`]: direction sets (exact Gauss and stratified);
+//! - [`param`]: sphere parameterisations (lat-long, angular, sphere map, octahedral, dual
+//!   paraboloid, cube) with per-texel solid angles.
 //!
 //! Conventions (DESIGN.md): right-handed, Y-up, metres; linear Rec.709 RGB radiometry.
 #![forbid(unsafe_code)]
@@ -18,6 +20,7 @@
 pub mod color;
 pub mod image;
 pub mod metrics;
+pub mod param;
 pub mod quadrature;
 pub mod sampling;
 pub mod sh;
