@@ -2,6 +2,8 @@
 //!
 //! The GPU-free foundation every other lightlab crate leans on:
 //!
+//! - [`brdf`]: BRDF models (Lambert, Phong, Blinn-Phong, Lafortune, Torrance–Sparrow, Ward,
+//!   Banks) behind one interface, and the factorised Torrance–Sparrow tables;
 //! - [`color`]: sRGB transfer, luminance, tone operators for PNG output;
 //! - [`sampling`]: a counter-based random number generator (deterministic whatever the thread
 //!   count), low-discrepancy sequences, and the direction/area samplers of the path tracer;
@@ -17,6 +19,7 @@
 //! Conventions (DESIGN.md): right-handed, Y-up, metres; linear Rec.709 RGB radiometry.
 #![forbid(unsafe_code)]
 
+pub mod brdf;
 pub mod color;
 pub mod image;
 pub mod metrics;
