@@ -10,10 +10,12 @@ use std::time::Instant;
 
 #[derive(Clone, Copy, ValueEnum, Debug)]
 pub enum FormatArg {
-    /// 2:1 images are lat-long, square ones angular.
+    /// 2:1 images are lat-long, square ones angular, 6:1 cube strips.
     Auto,
     Latlong,
     Angular,
+    /// Six square faces side by side: +X, −X, +Y, −Y, +Z, −Z.
+    CubeStrip,
 }
 
 #[derive(Subcommand)]
@@ -55,9 +57,10 @@ fn load(env: &std::path::Path, format: FormatArg, bands: usize) -> Result<(Image
     let f = match format {
         FormatArg::Latlong => EnvFormat::LatLong,
         FormatArg::Angular => EnvFormat::Angular,
+        FormatArg::CubeStrip => EnvFormat::CubeStrip,
         FormatArg::Auto => EnvFormat::guess(img.width, img.height).with_context(|| {
             format!(
-                "{}: cannot tell the layout of a {}×{} image (2:1 is lat-long, 1:1 angular); pass --format",
+                "{}: cannot tell the layout of a {}×{} image (2:1 is lat-long, 1:1 angular, 6:1 a cube strip); pass --format",
                 env.display(),
                 img.width,
                 img.height

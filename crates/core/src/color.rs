@@ -109,3 +109,148 @@ mod tests {
         }
     }
 }
+
+/// Ward Larson, Rushmeier & Piatko's histogram-adjustment tone operator (1997), with the
+/// constants of Fuchs's CaLight (§3.3.5; its `Ward97.cpp`): luminance = max(R, G, B),
+/// histogram of ln L over [ln 1e-4, max] in 300 bins, display range [1, 80] cd/m², histogram
+/// ceiling T·Δb/ln(Ld_max) re-applied until less than 2.5 % of the samples are trimmed (falling
+/// back to linear scaling when the histogram empties), Ld = Ld_max^P(ln L) with the cumulative
+/// histogram P interpolated within each bin. Each value is scaled by Ld/L
+/// (hue-preserving), then everything by the global maximum component, so the output lies in
+/// [0, 1]. Fuchs's final gamma 2.0 for 8-bit light-maps is left to the caller.
+#[derive(Clone, Copy, Debug)]
+pub struct WardLarson {
+    pub bins: usize,
+    pub ld_max: f64,
+    pub tolerance: f64,
+    pub floor: f64,
+}
+
+impl Default for WardLarson {
+    fn default() -> Self {
+        WardLarson {
+            bins: 300,
+            ld_max: 80.0,
+            tolerance: 0.025,
+            floor: 1e-4,
+        }
+    }
+}
+
+impl WardLarson {
+    /// Tone-map a set of linear RGB values (pixels or light-map texels).
+    pub fn apply(&self, values: &[Vec3]) -> Vec<Vec3> {
+        let lum: Vec<f64> = values
+            .iter()
+            .map(|v| v.max_element().max(0.0) as f64)
+            .collect();
+        let b: Vec<f64> = lum.iter().map(|l| l.max(self.floor).ln()).collect();
+        let bmin = self.floor.ln();
+        let bmax = b.iter().cloned().fold(bmin, f64::max);
+        let bins = self.bins.max(1);
+        let width = (bmax - bmin) / bins as f64;
+        let mapped: Vec<f64> = if width <= 0.0 {
+            lum.clone()
+        } else {
+            let bin_of = |x: f64| (((x - bmin) / width) as usize).min(bins - 1);
+            let mut hist = vec![0.0f64; bins];
+            for &x in &b {
+                hist[bin_of(x)] += 1.0;
+            }
+            let t0 = values.len() as f64;
+            let mut linear = false;
+            loop {
+                let t: f64 = hist.iter().sum();
+                if t < self.tolerance * t0 {
+                    linear = true;
+                    break;
+                }
+                let ceiling = t * width / self.ld_max.ln();
+                let mut trimmed = 0.0;
+                for h in &mut hist {
+                    if *h > ceiling {
+                        trimmed += *h - ceiling;
+                        *h = ceiling;
+                    }
+                }
+                if trimmed <= self.tolerance * t0 {
+                    break;
+                }
+            }
+            if linear {
+                lum.clone()
+            } else {
+                let total: f64 = hist.iter().sum();
+                let mut cum = vec![0.0; bins];
+                let mut acc = 0.0;
+                for (c, h) in cum.iter_mut().zip(&hist) {
+                    *c = acc / total;
+                    acc += h;
+                }
+                // Interpolated within the bin (as Ward Larson et al.; CaLight used the bin's
+                // start, which is flat inside a bin and bands into 300 levels).
+                b.iter()
+                    .map(|&x| {
+                        let k = bin_of(x);
+                        let frac = ((x - bmin) / width - k as f64).clamp(0.0, 1.0);
+                        self.ld_max.powf(cum[k] + frac * hist[k] / total)
+                    })
+                    .collect()
+            }
+        };
+        let scaled: Vec<Vec3> = values
+            .iter()
+            .zip(lum.iter().zip(&mapped))
+            .map(|(v, (l, m))| {
+                if *l > 0.0 {
+                    *v * (*m / *l) as f32
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .collect();
+        let peak = scaled
+            .iter()
+            .map(|v| v.max_element())
+            .fold(0.0f32, f32::max);
+        if peak > 0.0 {
+            scaled
+                .into_iter()
+                .map(|v| (v / peak).clamp(Vec3::ZERO, Vec3::ONE))
+                .collect()
+        } else {
+            scaled
+        }
+    }
+}
+
+#[cfg(test)]
+mod ward_tests {
+    use super::*;
+
+    #[test]
+    fn ward_larson_is_monotone_bounded_and_keeps_uniform_input_uniform() {
+        // Grey values log-uniform over six decades.
+        let input: Vec<Vec3> = (0..2000)
+            .map(|i| Vec3::splat(10f32.powf(-3.0 + 6.0 * i as f32 / 1999.0)))
+            .collect();
+        let out = WardLarson::default().apply(&input);
+        let mut last = -1.0;
+        for v in &out {
+            assert!((0.0..=1.0).contains(&v.x));
+            assert!(v.x >= last, "not monotone");
+            last = v.x;
+        }
+        // Six decades are compressed into the display's ≈ 80:1.
+        let lo = out
+            .iter()
+            .map(|v| v.x)
+            .filter(|x| *x > 0.0)
+            .fold(1.0f32, f32::min);
+        assert!(1.0 / lo <= 81.0, "contrast {}", 1.0 / lo);
+        let uniform = WardLarson::default().apply(&vec![Vec3::new(0.3, 0.2, 0.1); 100]);
+        assert!(uniform.iter().all(|v| (*v - uniform[0]).length() < 1e-7));
+        // Hue is preserved.
+        assert!((uniform[0].y / uniform[0].x - 2.0 / 3.0).abs() < 1e-5);
+    }
+}

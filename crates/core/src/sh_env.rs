@@ -10,6 +10,9 @@
 //!   d = (sin θ cos φ, sin θ sin φ, cos θ); solid angle (2π/W)(2π/H)·sinθ/θ.
 //!   Coefficients of an angular probe are in the probe's own frame, as in their paper.
 //!
+//! - **cube strip**: six square faces side by side (+X, −X, +Y, −Y, +Z, −Z), exact texel solid
+//!   angles (`param::Param::Cube`).
+//!
 //! Texel values are taken at texel centres, weighted by the texel's solid angle.
 
 use crate::image::Image;
@@ -22,6 +25,9 @@ use std::f64::consts::PI;
 pub enum EnvFormat {
     LatLong,
     Angular,
+    /// Six square cube faces side by side (+X, −X, +Y, −Y, +Z, −Z; OpenGL/Vulkan face
+    /// orientation, see `param::Param::Cube`).
+    CubeStrip,
 }
 
 impl EnvFormat {
@@ -31,6 +37,8 @@ impl EnvFormat {
             Some(EnvFormat::LatLong)
         } else if width == height {
             Some(EnvFormat::Angular)
+        } else if width == 6 * height {
+            Some(EnvFormat::CubeStrip)
         } else {
             None
         }
@@ -71,6 +79,29 @@ pub fn for_each_texel(img: &Image, format: EnvFormat, mut f: impl FnMut(DVec3, f
                 for x in 0..w {
                     let d = latlong_dir_f64((x as f64 + 0.5) / w as f64, v);
                     f(d, omega, img.data[y * w + x]);
+                }
+            }
+        }
+        EnvFormat::CubeStrip => {
+            use crate::param::Param;
+            let n = h as u32;
+            for face in 0..6usize {
+                for y in 0..n {
+                    for x in 0..n {
+                        let uv = glam::DVec2::new(
+                            (x as f64 + 0.5) / n as f64,
+                            (y as f64 + 0.5) / n as f64,
+                        );
+                        let d = Param::Cube
+                            .uv_to_dir(face, uv)
+                            .expect("cube maps are total");
+                        let omega = Param::Cube.texel_solid_angle(x, y, n, n);
+                        f(
+                            d,
+                            omega,
+                            img.data[y as usize * w + face * n as usize + x as usize],
+                        );
+                    }
                 }
             }
         }

@@ -366,3 +366,69 @@ fn env_projection_matches_brute_force() {
         c[0].x
     );
 }
+
+/// A cube strip and a lat-long map of the same smooth sky project to the same coefficients.
+#[test]
+fn cube_strip_projection_agrees_with_latlong() {
+    let sky = |d: DVec3| {
+        Vec3::new(
+            (1.0 + d.x * 0.5 + d.y * d.y) as f32,
+            (0.7 + 0.3 * d.z) as f32,
+            0.5,
+        )
+    };
+    let n = 128u32;
+    let strip = Image::from_fn(6 * n, n, |x, y| {
+        let face = (x / n) as usize;
+        let uv = glam::DVec2::new(
+            ((x % n) as f64 + 0.5) / n as f64,
+            (y as f64 + 0.5) / n as f64,
+        );
+        sky(lightlab_core::param::Param::Cube
+            .uv_to_dir(face, uv)
+            .unwrap())
+    });
+    let ll = Image::from_fn(512, 256, |x, y| {
+        let d = sh_env::latlong_uv_to_dir(glam::Vec2::new(
+            (x as f32 + 0.5) / 512.0,
+            (y as f32 + 0.5) / 256.0,
+        ));
+        sky(d.as_dvec3())
+    });
+    assert_eq!(
+        EnvFormat::guess(strip.width, strip.height),
+        Some(EnvFormat::CubeStrip)
+    );
+    let a = sh_env::project_env(&strip, EnvFormat::CubeStrip, 3);
+    let b = sh_env::project_env(&ll, EnvFormat::LatLong, 3);
+    let worst = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (*x - *y).abs().max_element())
+        .fold(0.0, f64::max);
+    eprintln!("cube strip (6×128²) vs lat-long (512×256): max |Δc| = {worst:e}");
+    assert!(worst < 1e-3, "{worst}");
+    let c = sh_env::project_env(
+        &Image::from_fn(6 * 16, 16, |_, _| Vec3::ONE),
+        EnvFormat::CubeStrip,
+        1,
+    );
+    assert!(
+        (c[0].x - 2.0 * PI.sqrt()).abs() < 1e-12,
+        "cube texel solid angles sum to 4π"
+    );
+}
+
+/// The normalised Phong lobe integrates to one (z₀ = Y₀₀), and its convolution weights
+/// √(4π/(2l+1))·zₗ/z₀·Y... fall off like Ramamoorthi's exp(−l²/2n) for large n.
+#[test]
+fn phong_lobe_zonal_coefficients() {
+    let n = 64.0;
+    let z = sh::phong_zonal(6, n);
+    assert!((z[0] - 0.5 / PI.sqrt()).abs() < 1e-9, "{}", z[0]);
+    for l in 1..6 {
+        let a = (4.0 * PI / (2 * l + 1) as f64).sqrt() * z[l] / ((4.0 * PI).sqrt() * z[0]);
+        let approx = (-((l * l) as f64) / (2.0 * n)).exp();
+        assert!((a - approx).abs() < 0.03, "l={l}: {a} vs {approx}");
+    }
+}
