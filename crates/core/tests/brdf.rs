@@ -95,6 +95,24 @@ fn models() -> Vec<(&'static str, Box<dyn Brdf>)> {
             }),
         ),
         (
+            "ts ggx conductor-like (η 200)",
+            Box::new(TorranceSparrow {
+                ks: 1.0,
+                eta: 200.0,
+                distribution: Distribution::Ggx { alpha: 0.4 },
+                masking: Masking::SmithHeightCorrelated,
+            }),
+        ),
+        (
+            "ts beckmann conductor-like (η 200)",
+            Box::new(TorranceSparrow {
+                ks: 1.0,
+                eta: 200.0,
+                distribution: Distribution::Beckmann { m: 0.2 },
+                masking: Masking::Smith,
+            }),
+        ),
+        (
             "ward",
             Box::new(Ward {
                 kd: 0.2,
