@@ -50,6 +50,8 @@ struct Row {
     settings: RenderSettings,
     seconds: f64,
     triangles: usize,
+    /// Error against the scene's `reference` image (None for the reference itself).
+    error: Option<lightlab_core::metrics::Comparison>,
 }
 
 pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
@@ -69,6 +71,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
     let mut rows = vec![];
     for name in names {
         let scene = lightlab_scene::builtin::builtin(name).expect("built-in");
+        let mut reference: Option<lightlab_core::image::Image> = None;
         for technique in ["reference", "direct"] {
             let mut settings = settings_for(name, quality);
             if technique == "direct" {
@@ -84,6 +87,18 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 "{name:<8} {technique:<10} {:>4}×{:<4} {:>5} spp {seconds:>7.1} s",
                 settings.width, settings.height, settings.spp
             );
+            // Every technique is measured against the same scene's reference image.
+            let error = match &reference {
+                Some(r) => Some(lightlab_core::metrics::compare(
+                    &img,
+                    r,
+                    LdrSettings::default(),
+                )?),
+                None => None,
+            };
+            if technique == "reference" {
+                reference = Some(img);
+            }
             rows.push(Row {
                 scene: name.into(),
                 technique: technique.into(),
@@ -91,6 +106,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 settings,
                 seconds,
                 triangles: scene.triangle_count(),
+                error,
             });
         }
     }
@@ -144,16 +160,21 @@ fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
             s = r.seconds
         ));
     }
-    h.push_str("<h2>Timings</h2><table><tr><th>scene</th><th>technique</th><th>size</th><th>spp</th><th>seconds</th><th>Msamples/s</th></tr>");
+    h.push_str("<h2>Errors against the reference and timings</h2><table><tr><th>scene</th><th>technique</th><th>size</th><th>spp</th>\
+        <th>RMSE</th><th>relMSE</th><th>FLIP</th><th>seconds</th><th>Msamples/s</th></tr>");
     for r in rows {
         let samples = r.settings.width as f64 * r.settings.height as f64 * r.settings.spp as f64;
         h.push_str(&format!(
-            "<tr><td>{}</td><td>{}</td><td>{}×{}</td><td>{}</td><td>{:.2}</td><td>{:.2}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}×{}</td><td>{}</td>{}<td>{:.2}</td><td>{:.2}</td></tr>",
             r.scene,
             r.technique,
             r.settings.width,
             r.settings.height,
             r.settings.spp,
+            match &r.error {
+                Some(e) => format!("<td>{:.5}</td><td>{:.5}</td><td>{:.4}</td>", e.rmse, e.relmse, e.flip),
+                None => "<td colspan=\"3\">(ground truth)</td>".into(),
+            },
             r.seconds,
             samples / r.seconds / 1e6
         ));

@@ -265,6 +265,8 @@ fn demo_preview_writes_a_report_with_every_scene() {
         assert!(html.contains(&format!("{s}-reference.png")), "{s}");
         assert!(dir.path().join(format!("{s}-reference.exr")).exists());
     }
+    // `direct` is measured against the reference: three figures per row.
+    assert!(html.contains("relMSE") && html.contains("(ground truth)"));
 }
 
 #[test]
