@@ -29,6 +29,8 @@ pub struct Hit {
     /// Barycentric weights of the triangle's second and third vertices (the first has
     /// 1 − b.x − b.y).
     pub bary: Vec2,
+    /// The triangle's slot in the BVH (for [`Accel::world_triangle`]).
+    pub slot: u32,
 }
 
 struct AlphaTri {
@@ -171,6 +173,13 @@ impl Accel {
         }
     }
 
+    /// World-space vertices of the triangle in BVH slot `slot`, in the mesh's winding order.
+    #[inline]
+    pub fn world_triangle(&self, slot: u32) -> [Vec3; 3] {
+        let t = &self.tris[slot as usize];
+        [t.v0.into(), (t.v0 - t.e1).into(), (t.v0 + t.e2).into()]
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.tris.len()
     }
@@ -220,6 +229,7 @@ impl Accel {
                 t: hit.t,
                 prim: self.prims[slot],
                 bary: b,
+                slot: slot as u32,
             })
         } else {
             None

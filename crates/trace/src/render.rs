@@ -118,7 +118,8 @@ pub fn surface(scene: &Scene, accel: &Accel, hit: &Hit) -> Surface {
     let idx = [mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]].map(|i| i as usize);
     let (b1, b2) = (hit.bary.x, hit.bary.y);
     let b0 = 1.0 - b1 - b2;
-    let pw = idx.map(|i| inst.transform.transform_point3(mesh.positions[i]));
+    // World-space vertices straight from the BVH's triangle array (no re-transform).
+    let pw = accel.world_triangle(hit.slot);
     let p = pw[0] * b0 + pw[1] * b1 + pw[2] * b2;
     let ng = (pw[1] - pw[0]).cross(pw[2] - pw[0]).normalize_or(Vec3::Y);
     let nm: Mat3 = accel.normal_matrices[hit.prim.instance as usize];
