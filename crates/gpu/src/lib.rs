@@ -1,0 +1,105 @@
+//! # lightlab-gpu
+//!
+//! The real-time half of lightlab (issue 4 onwards): a wgpu context that runs on real GPUs and,
+//! headless, on Mesa's lavapipe (Vulkan) or llvmpipe (GL); one module + one WGSL file per
+//! technique will live beside it.
+//!
+//! Adapter choice follows wgpu's environment variables: `WGPU_BACKEND` (`vulkan`, `gl`, …),
+//! `WGPU_ADAPTER_NAME` (a substring of the adapter name) and `WGPU_POWER_PREF`; the default is
+//! the high-performance adapter of any backend.
+
+use std::fmt;
+
+/// Errors of context creation.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error(
+        "no GPU adapter found ({0}). On a machine without a GPU install Mesa's lavapipe \
+         (Debian: `apt-get install mesa-vulkan-drivers libvulkan1`) or use WGPU_BACKEND=gl"
+    )]
+    NoAdapter(String),
+    #[error("the adapter '{adapter}' refused a device: {message}")]
+    Device { adapter: String, message: String },
+}
+
+/// A headless wgpu device and queue with the adapter they came from.
+pub struct GpuContext {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+}
+
+impl fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "GpuContext({} on {:?}, {})",
+            self.info.name, self.info.backend, self.info.driver
+        )
+    }
+}
+
+impl GpuContext {
+    /// A context without a window, on the adapter the environment selects.
+    pub fn headless() -> Result<GpuContext, GpuError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let power_preference =
+            wgpu::PowerPreference::from_env().unwrap_or(wgpu::PowerPreference::HighPerformance);
+        let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(
+            &instance, None,
+        ))
+        .or_else(|_| {
+            pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference,
+                ..Default::default()
+            }))
+        })
+        .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let info = adapter.get_info();
+        // Timestamps where the adapter has them (per-pass GPU timings).
+        let wanted =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("lightlab"),
+            required_features: adapter.features() & wanted,
+            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+        Ok(GpuContext {
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// Whether GPU timestamps can be written inside passes and encoders.
+    pub fn has_timestamps(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+}
+
+/// For tests: a context, or None with a message when no adapter exists and we are not under CI.
+/// Under `CI=true` a missing adapter panics: GPU tests never skip silently there.
+pub fn test_context() -> Option<GpuContext> {
+    match GpuContext::headless() {
+        Ok(c) => Some(c),
+        Err(e) if std::env::var("CI").as_deref() != Ok("true") => {
+            eprintln!("skipping GPU test: {e}");
+            None
+        }
+        Err(e) => panic!("CI=true and {e}"),
+    }
+}
