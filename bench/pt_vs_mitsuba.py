@@ -18,16 +18,7 @@ Installs mitsuba and numpy into bench/.venv on first use.
 """
 import argparse, json, math, os, struct, subprocess, sys, tempfile, time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-VENV = os.path.join(ROOT, "bench", ".venv")
-
-
-def ensure_venv(packages):
-    py = os.path.join(VENV, "bin", "python")
-    if not os.path.exists(py):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-    subprocess.check_call([py, "-m", "pip", "install", "-q", *packages])
-    return py
+from benchlib import ensure_venv, lightlab_exe
 
 
 def main():
@@ -44,8 +35,7 @@ def main():
     if args.inner:
         return mitsuba_inner(args)
     py = ensure_venv(["mitsuba", "numpy"])
-    subprocess.check_call(["cargo", "build", "--release", "-q", "-p", "lightlab"], cwd=ROOT)
-    exe = os.path.join(ROOT, "target", "release", "lightlab")
+    exe = lightlab_exe()
     with tempfile.TemporaryDirectory() as tmp:
         gltf = os.path.join(tmp, f"{args.scene}.gltf")
         subprocess.check_call([exe, "export", "--scene", args.scene, "-o", gltf], stderr=subprocess.DEVNULL)

@@ -15,16 +15,7 @@ with its alpha test (the leaves of `bush`) is printed beside for reference.
 """
 import argparse, json, os, subprocess, sys, tempfile, time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-VENV = os.path.join(ROOT, "bench", ".venv")
-
-
-def ensure_venv(packages):
-    py = os.path.join(VENV, "bin", "python")
-    if not os.path.exists(py):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-    subprocess.check_call([py, "-m", "pip", "install", "-q", *packages])
-    return py
+from benchlib import ensure_venv, lightlab_exe
 
 
 def main():
@@ -38,8 +29,7 @@ def main():
     if args.inner:
         return embree_inner(args.dir)
     py = ensure_venv(["embreex", "numpy"])
-    subprocess.check_call(["cargo", "build", "--release", "-q", "-p", "lightlab"], cwd=ROOT)
-    exe = os.path.join(ROOT, "target", "release", "lightlab")
+    exe = lightlab_exe()
     results = []
     with tempfile.TemporaryDirectory() as tmp:
         for scene in args.scenes.split(","):
