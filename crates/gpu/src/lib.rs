@@ -8,6 +8,9 @@
 //! `WGPU_ADAPTER_NAME` (a substring of the adapter name) and `WGPU_POWER_PREF`; the default is
 //! the high-performance adapter of any backend.
 
+pub mod layout;
+pub mod uniforms;
+
 use std::fmt;
 
 /// Errors of context creation.

@@ -1,0 +1,106 @@
+//! WGSL validation and layout checks with naga (wgpu's own shader compiler).
+//!
+//! Every WGSL file is parsed and validated in `cargo test` (no GPU needed), and every Rust struct
+//! that is uploaded to the GPU is compared, field by field, with naga's layout of the WGSL struct
+//! of the same name: offsets and total size must agree, so a forgotten padding field fails a test
+//! instead of corrupting a frame.
+
+use wgpu::naga;
+
+/// The layout of a Rust struct: its size and (field name, offset) pairs.
+#[derive(Clone, Debug)]
+pub struct RustLayout {
+    pub size: usize,
+    pub fields: Vec<(&'static str, usize)>,
+}
+
+/// `rust_layout!(Type, field, …)`: the [`RustLayout`] of a `#[repr(C)]` struct.
+#[macro_export]
+macro_rules! rust_layout {
+    ($t:ty, $($f:ident),+ $(,)?) => {
+        $crate::layout::RustLayout {
+            size: ::std::mem::size_of::<$t>(),
+            fields: vec![$((stringify!($f), ::std::mem::offset_of!($t, $f))),+],
+        }
+    };
+}
+
+/// Parse and validate a WGSL module.
+pub fn validate_wgsl(source: &str) -> Result<naga::Module, String> {
+    let module = naga::front::wgsl::parse_str(source).map_err(|e| e.emit_to_string(source))?;
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .map_err(|e| format!("{e:?}"))?;
+    Ok(module)
+}
+
+/// Compare a Rust struct with the WGSL struct `name` declared in `source`.
+pub fn check_struct(source: &str, name: &str, rust: &RustLayout) -> Result<(), String> {
+    let module = validate_wgsl(source)?;
+    let (members, span) = module
+        .types
+        .iter()
+        .find_map(|(_, ty)| match (&ty.name, &ty.inner) {
+            (Some(n), naga::TypeInner::Struct { members, span }) if n == name => {
+                Some((members.clone(), *span))
+            }
+            _ => None,
+        })
+        .ok_or_else(|| format!("no struct {name} in the WGSL source"))?;
+    if span as usize != rust.size {
+        return Err(format!(
+            "{name}: WGSL size {span} ≠ Rust size {}",
+            rust.size
+        ));
+    }
+    if members.len() != rust.fields.len() {
+        return Err(format!(
+            "{name}: WGSL has {} fields, Rust {}",
+            members.len(),
+            rust.fields.len()
+        ));
+    }
+    for (m, (rname, roff)) in members.iter().zip(&rust.fields) {
+        let wname = m.name.as_deref().unwrap_or("?");
+        if wname != *rname || m.offset as usize != *roff {
+            return Err(format!(
+                "{name}.{wname}: WGSL offset {} ≠ Rust {rname} at {roff}",
+                m.offset
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every WGSL file of the crate, for validation.
+pub const ALL_SHADERS: &[(&str, &str)] = &[("common.wgsl", crate::uniforms::COMMON_WGSL)];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_wgsl_file_validates() {
+        for (name, src) in ALL_SHADERS {
+            validate_wgsl(src).unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+    }
+
+    #[test]
+    fn a_layout_mismatch_is_reported() {
+        #[repr(C)]
+        struct Bad {
+            a: [f32; 3],
+            b: [f32; 3],
+        }
+        let wgsl =
+            "struct Bad { a: vec3<f32>, b: vec3<f32> }\n@group(0) @binding(0) var<uniform> u: Bad;";
+        // vec3 aligns to 16 bytes in WGSL: b sits at 16, not 12.
+        let e = check_struct(wgsl, "Bad", &rust_layout!(Bad, a, b)).unwrap_err();
+        assert!(e.contains("Bad"), "{e}");
+        assert!(validate_wgsl("fn broken( {").is_err());
+    }
+}
