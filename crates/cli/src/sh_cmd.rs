@@ -2,7 +2,7 @@
 //! irradiance maps of environment maps (the user job of Ramamoorthi–Hanrahan's `prefilter`).
 
 use anyhow::{Context, Result, bail};
-use clap::{Subcommand, ValueEnum};
+use clap::{Args, Subcommand, ValueEnum};
 use lightlab_core::image::{Image, LdrSettings};
 use lightlab_core::sh_env::{self, EnvFormat};
 use std::path::PathBuf;
@@ -18,29 +18,33 @@ pub enum FormatArg {
     CubeStrip,
 }
 
+/// The environment map shared by the `sh` subcommands.
+#[derive(Args)]
+pub struct EnvArgs {
+    /// Environment map (HDR/EXR/PNG).
+    #[arg(long)]
+    env: PathBuf,
+    /// Number of bands (l_max + 1), 1..=16.
+    #[arg(long, default_value_t = 3)]
+    bands: usize,
+    #[arg(long, value_enum, default_value_t = FormatArg::Auto)]
+    format: FormatArg,
+}
+
 #[derive(Subcommand)]
 pub enum ShCommand {
-    /// Print the RGB SH coefficients of an environment map (HDR/EXR/PNG).
+    /// Print the RGB SH coefficients of an environment map.
     Project {
-        #[arg(long)]
-        env: PathBuf,
-        /// Number of bands (l_max + 1), 1..=16.
-        #[arg(long, default_value_t = 3)]
-        bands: usize,
-        #[arg(long, value_enum, default_value_t = FormatArg::Auto)]
-        format: FormatArg,
+        #[command(flatten)]
+        map: EnvArgs,
         /// Print one JSON object as the last line.
         #[arg(long)]
         json: bool,
     },
     /// Write the irradiance map (lat-long, linear EXR) of an environment map.
     Irradiance {
-        #[arg(long)]
-        env: PathBuf,
-        #[arg(long, default_value_t = 3)]
-        bands: usize,
-        #[arg(long, value_enum, default_value_t = FormatArg::Auto)]
-        format: FormatArg,
+        #[command(flatten)]
+        map: EnvArgs,
         /// Width of the output (height = width/2).
         #[arg(long, default_value_t = 256)]
         width: u32,
@@ -49,7 +53,9 @@ pub enum ShCommand {
     },
 }
 
-fn load(env: &std::path::Path, format: FormatArg, bands: usize) -> Result<(Image, EnvFormat)> {
+/// Read the map and settle its layout (checking the band count first).
+fn load(args: &EnvArgs) -> Result<(Image, EnvFormat)> {
+    let (env, format, bands) = (&args.env, args.format, args.bands);
     if !(1..=16).contains(&bands) {
         bail!("--bands must be in 1..=16 (got {bands})");
     }
@@ -72,13 +78,9 @@ fn load(env: &std::path::Path, format: FormatArg, bands: usize) -> Result<(Image
 
 pub fn run(cmd: ShCommand) -> Result<()> {
     match cmd {
-        ShCommand::Project {
-            env,
-            bands,
-            format,
-            json,
-        } => {
-            let (img, f) = load(&env, format, bands)?;
+        ShCommand::Project { map, json } => {
+            let (img, f) = load(&map)?;
+            let bands = map.bands;
             let t = Instant::now();
             let c = sh_env::project_env(&img, f, bands);
             let secs = t.elapsed().as_secs_f64();
@@ -102,14 +104,9 @@ pub fn run(cmd: ShCommand) -> Result<()> {
             }
             Ok(())
         }
-        ShCommand::Irradiance {
-            env,
-            bands,
-            format,
-            width,
-            output,
-        } => {
-            let (img, f) = load(&env, format, bands)?;
+        ShCommand::Irradiance { map, width, output } => {
+            let (img, f) = load(&map)?;
+            let bands = map.bands;
             if !(2..=16_384).contains(&width) {
                 bail!("--width must be in 2..=16384");
             }
