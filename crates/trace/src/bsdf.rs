@@ -14,6 +14,7 @@
 //!   one-sample mixture, as multiple importance sampling needs.
 
 use glam::{Vec2, Vec3, Vec4};
+use lightlab_core::brdf::Distribution;
 use lightlab_core::color::luminance;
 use lightlab_core::sampling::cosine_hemisphere;
 use lightlab_scene::{Material, Scene};
@@ -36,21 +37,16 @@ fn schlick(cos: f32, f0: Vec3) -> Vec3 {
     f0 + (Vec3::ONE - f0) * m
 }
 
-#[inline]
-fn ggx_d(cos_h: f32, a2: f32) -> f32 {
-    let c2 = cos_h * cos_h;
-    let d = c2 * (a2 - 1.0) + 1.0;
-    a2 / (PI * d * d)
-}
-
-#[inline]
-fn smith_lambda(cos: f32, a2: f32) -> f32 {
-    let c2 = (cos * cos).max(1e-12);
-    let tan2 = (1.0 - c2) / c2;
-    0.5 * (-1.0 + (1.0 + a2 * tan2).sqrt())
-}
-
 impl Bsdf {
+    /// The specular lobe's microfacet distribution: core's GGX (one implementation of D, Λ and
+    /// the half-vector sampler for the whole toolkit).
+    #[inline]
+    fn ggx(&self) -> Distribution {
+        Distribution::Ggx {
+            alpha: self.alpha as f64,
+        }
+    }
+
     /// The BSDF of `material` at texture coordinate `uv`, seen from local direction `wo`.
     pub fn new(scene: &Scene, material: &Material, uv: Vec2, wo_z: f32) -> Bsdf {
         let mut base = material.base_color;
@@ -108,9 +104,9 @@ impl Bsdf {
         let mut f = diffuse * (1.0 - self.transmission);
         if self.specular && wo.z > 0.0 {
             let h = (wo + wi).normalize();
-            let a2 = self.alpha * self.alpha;
-            let d = ggx_d(h.z, a2);
-            let g = 1.0 / (1.0 + smith_lambda(wo.z, a2) + smith_lambda(wi.z, a2));
+            let ggx = self.ggx();
+            let d = ggx.d(h.z as f64) as f32;
+            let g = (1.0 / (1.0 + ggx.lambda(wo.z as f64) + ggx.lambda(wi.z as f64))) as f32;
             let fr = schlick(wo.dot(h), self.f0);
             f += fr * (d * g / (4.0 * wo.z * wi.z));
         }
@@ -126,8 +122,7 @@ impl Bsdf {
         };
         let ps = if self.specular && wi.z > 0.0 && wo.z > 0.0 {
             let h = (wo + wi).normalize();
-            let a2 = self.alpha * self.alpha;
-            ggx_d(h.z, a2) * h.z / (4.0 * wo.dot(h).abs().max(1e-8))
+            self.ggx().d(h.z as f64) as f32 * h.z / (4.0 * wo.dot(h).abs().max(1e-8))
         } else {
             0.0
         };
@@ -137,12 +132,7 @@ impl Bsdf {
     /// Sample an incident direction: (wi, f, pdf), or None when the sample is invalid.
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
         let wi = if u_lobe < self.p_spec {
-            let a2 = self.alpha * self.alpha;
-            let tan2 = a2 * u.x / (1.0 - u.x).max(1e-8);
-            let cos_h = 1.0 / (1.0 + tan2).sqrt();
-            let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
-            let phi = 2.0 * PI * u.y;
-            let h = Vec3::new(sin_h * phi.cos(), sin_h * phi.sin(), cos_h);
+            let h = self.ggx().sample_h(u.as_dvec2()).as_vec3();
             let wi = 2.0 * wo.dot(h) * h - wo;
             if wi.z <= 0.0 {
                 return None;
