@@ -16,8 +16,9 @@
 //! Texel values are taken at texel centres, weighted by the texel's solid angle.
 
 use crate::image::Image;
+use crate::param::Param;
 use crate::sh::{eval_f64, irradiance_from_radiance, num_coeffs};
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 use std::f64::consts::PI;
 
 /// Layout of an environment image.
@@ -45,53 +46,45 @@ impl EnvFormat {
     }
 }
 
-/// Lat-long: direction → uv in [0,1)².
+/// Lat-long: direction → uv in [0,1)² (`param::Param::LatLong`, in f32 for the renderers).
 pub fn latlong_dir_to_uv(d: Vec3) -> Vec2 {
-    let u = 0.5 + d.x.atan2(-d.z) / (2.0 * std::f32::consts::PI);
-    let v = d.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
-    Vec2::new(u.rem_euclid(1.0), v)
+    Param::LatLong.dir_to_uv(d.as_dvec3()).1.as_vec2()
 }
 
 /// Lat-long: uv → unit direction.
 pub fn latlong_uv_to_dir(uv: Vec2) -> Vec3 {
-    let phi = (uv.x - 0.5) * 2.0 * std::f32::consts::PI;
-    let theta = uv.y * std::f32::consts::PI;
-    let s = theta.sin();
-    Vec3::new(s * phi.sin(), theta.cos(), -s * phi.cos())
+    Param::LatLong
+        .uv_to_dir(0, uv.as_dvec2())
+        .expect("lat-long maps are total")
+        .as_vec3()
 }
 
-fn latlong_dir_f64(u: f64, v: f64) -> DVec3 {
-    let phi = (u - 0.5) * 2.0 * PI;
-    let theta = v * PI;
-    let s = theta.sin();
-    DVec3::new(s * phi.sin(), theta.cos(), -s * phi.cos())
-}
-
-/// Visit every texel of an environment image with its direction and solid angle.
+/// Visit every texel of an environment image with its direction and solid angle. Directions
+/// come from `param::Param`, the one owner of each mapping.
 pub fn for_each_texel(img: &Image, format: EnvFormat, mut f: impl FnMut(DVec3, f64, Vec3)) {
     let (w, h) = (img.width as usize, img.height as usize);
+    let centre = |x: usize, y: usize, w: usize, h: usize| {
+        DVec2::new((x as f64 + 0.5) / w as f64, (y as f64 + 0.5) / h as f64)
+    };
     match format {
         EnvFormat::LatLong => {
             for y in 0..h {
-                let (t0, t1) = (PI * y as f64 / h as f64, PI * (y + 1) as f64 / h as f64);
-                let omega = 2.0 * PI / w as f64 * (t0.cos() - t1.cos());
-                let v = (y as f64 + 0.5) / h as f64;
+                // The same for the whole row: computed once.
+                let omega = Param::LatLong.texel_solid_angle(0, y as u32, w as u32, h as u32);
                 for x in 0..w {
-                    let d = latlong_dir_f64((x as f64 + 0.5) / w as f64, v);
+                    let d = Param::LatLong
+                        .uv_to_dir(0, centre(x, y, w, h))
+                        .expect("total");
                     f(d, omega, img.data[y * w + x]);
                 }
             }
         }
         EnvFormat::CubeStrip => {
-            use crate::param::Param;
             let n = h as u32;
             for face in 0..6usize {
                 for y in 0..n {
                     for x in 0..n {
-                        let uv = glam::DVec2::new(
-                            (x as f64 + 0.5) / n as f64,
-                            (y as f64 + 0.5) / n as f64,
-                        );
+                        let uv = centre(x as usize, y as usize, n as usize, n as usize);
                         let d = Param::Cube
                             .uv_to_dir(face, uv)
                             .expect("cube maps are total");
@@ -107,18 +100,20 @@ pub fn for_each_texel(img: &Image, format: EnvFormat, mut f: impl FnMut(DVec3, f
         }
         EnvFormat::Angular => {
             for y in 0..h {
-                let v = (h as f64 / 2.0 - (y as f64 + 0.5)) / (h as f64 / 2.0);
                 for x in 0..w {
-                    let u = ((x as f64 + 0.5) - w as f64 / 2.0) / (w as f64 / 2.0);
-                    let r = (u * u + v * v).sqrt();
-                    if r > 1.0 {
+                    // Outside the disc there is no direction.
+                    let Some(d) = Param::Angular.uv_to_dir(0, centre(x, y, w, h)) else {
                         continue;
-                    }
-                    let theta = PI * r;
-                    let phi = v.atan2(u);
-                    let st = theta.sin();
-                    let d = DVec3::new(st * phi.cos(), st * phi.sin(), theta.cos());
-                    let sinc = if theta > 0.0 { st / theta } else { 1.0 };
+                    };
+                    // Ramamoorthi–Hanrahan's centre-sample solid angle (prefilter.c):
+                    // (2π/W)(2π/H)·sinθ/θ. (`Param::Angular::texel_solid_angle` is exact but
+                    // integrates every texel, ≈ 10× slower.)
+                    let theta = d.z.clamp(-1.0, 1.0).acos();
+                    let sinc = if theta > 0.0 {
+                        theta.sin() / theta
+                    } else {
+                        1.0
+                    };
                     let omega = (2.0 * PI / w as f64) * (2.0 * PI / h as f64) * sinc;
                     f(d, omega, img.data[y * w + x]);
                 }
@@ -149,10 +144,13 @@ pub fn irradiance_map(radiance: &[DVec3], width: u32) -> Image {
     let height = (width / 2).max(1);
     let mut y = vec![0.0; num_coeffs(bands)];
     Image::from_fn(width, height, |x, yy| {
-        let d = latlong_dir_f64(
+        let uv = DVec2::new(
             (x as f64 + 0.5) / width as f64,
             (yy as f64 + 0.5) / height as f64,
         );
+        let d = Param::LatLong
+            .uv_to_dir(0, uv)
+            .expect("lat-long maps are total");
         eval_f64(bands, d.x, d.y, d.z, &mut y);
         let v: DVec3 = e.iter().zip(&y).map(|(c, b)| *c * *b).sum();
         v.as_vec3()
