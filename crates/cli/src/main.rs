@@ -5,6 +5,7 @@
 
 mod bench;
 mod demo;
+mod raster_cmd;
 mod render;
 mod sh_cmd;
 

@@ -11,14 +11,21 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// Techniques `lightlab render` knows of, with whether they are built yet.
-pub const TECHNIQUES: [(&str, bool); 2] = [("reference", true), ("direct", true)];
+pub const TECHNIQUES: [(&str, bool); 5] = [
+    ("reference", true),
+    ("direct", true),
+    ("phong", true),
+    ("phong-shadow-volumes", true),
+    ("phong-shadow-maps", true),
+];
 
 #[derive(Args)]
 pub struct RenderArgs {
     /// A built-in scene name or a .gltf/.glb path.
     #[arg(long)]
     pub scene: String,
-    /// `reference` (path-traced ground truth) or `direct` (direct light only).
+    /// `reference` (path-traced ground truth), `direct` (direct light only), or a GPU
+    /// technique: `phong`, `phong-shadow-volumes`, `phong-shadow-maps`.
     #[arg(long, default_value = "reference")]
     pub technique: String,
     /// Folder of baked data, for techniques that use it.
@@ -57,6 +64,8 @@ pub struct RenderArgs {
     /// Print one JSON object with the timings as the last line.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub raster: crate::raster_cmd::RasterArgs,
     /// Output image: .exr (linear) or .png (tone-mapped sRGB).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -121,6 +130,10 @@ pub fn run(a: RenderArgs) -> Result<()> {
             intensity: a.env_intensity,
         });
     }
+    crate::raster_cmd::apply_brdf(&mut scene, a.raster.brdf.as_deref())?;
+    if crate::raster_cmd::RASTER_TECHNIQUES.contains(&a.technique.as_str()) {
+        return run_raster(&a, &scene);
+    }
     let settings = RenderSettings {
         width: a.width,
         height: a.height.unwrap_or(a.width),
@@ -159,6 +172,46 @@ pub fn run(a: RenderArgs) -> Result<()> {
                 "scene": scene.name, "technique": a.technique, "width": settings.width,
                 "height": settings.height, "spp": settings.spp, "seconds": secs,
                 "msamples_per_s": paths / secs / 1e6,
+            })
+        );
+    }
+    Ok(())
+}
+
+fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
+    let ctx = crate::raster_cmd::context()?;
+    let (w, h) = (a.width, a.height.unwrap_or(a.width));
+    let t0 = Instant::now();
+    let (img, times) =
+        crate::raster_cmd::render_raster(&ctx, scene, &a.technique, &a.raster, w, h, a.camera)?;
+    let secs = t0.elapsed().as_secs_f64();
+    img.write(
+        &a.output,
+        LdrSettings {
+            exposure: a.exposure,
+            tone: a.tonemap.into(),
+        },
+    )
+    .with_context(|| format!("writing {}", a.output.display()))?;
+    let gpu: f64 = times.gpu_ms.values().sum();
+    eprintln!(
+        "wrote {} ({w}×{h}, {}, frame {:.2} ms wall{}, {:.2} s in all)",
+        a.output.display(),
+        a.technique,
+        times.wall_ms,
+        if times.gpu_ms.is_empty() {
+            String::new()
+        } else {
+            format!(", {gpu:.3} ms GPU")
+        },
+        secs
+    );
+    if a.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "scene": scene.name, "technique": a.technique, "width": w, "height": h,
+                "seconds": secs, "frame_wall_ms": times.wall_ms, "gpu_ms": times.gpu_ms,
             })
         );
     }

@@ -76,7 +76,15 @@ pub fn check_struct(source: &str, name: &str, rust: &RustLayout) -> Result<(), S
 }
 
 /// Every WGSL file of the crate, for validation.
-pub const ALL_SHADERS: &[(&str, &str)] = &[("common.wgsl", crate::uniforms::COMMON_WGSL)];
+pub fn all_shaders() -> Vec<(&'static str, &'static str)> {
+    vec![
+        ("common.wgsl", crate::uniforms::COMMON_WGSL),
+        (
+            "common.wgsl + raster.wgsl",
+            crate::raster::SHADER_SOURCE.as_str(),
+        ),
+    ]
+}
 
 #[cfg(test)]
 mod tests {
@@ -84,7 +92,7 @@ mod tests {
 
     #[test]
     fn every_wgsl_file_validates() {
-        for (name, src) in ALL_SHADERS {
+        for (name, src) in all_shaders() {
             validate_wgsl(src).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
     }

@@ -8,7 +8,11 @@
 //! `WGPU_ADAPTER_NAME` (a substring of the adapter name) and `WGPU_POWER_PREF`; the default is
 //! the high-performance adapter of any backend.
 
+pub mod gpu_scene;
 pub mod layout;
+pub mod lights;
+pub mod raster;
+pub mod shadow_volume;
 pub mod uniforms;
 
 use std::fmt;
@@ -68,7 +72,16 @@ impl GpuContext {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lightlab"),
             required_features: adapter.features() & wanted,
-            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            // Down-level limits, with the adapter's resolution and colour-attachment limits
+            // (the deferred G-buffer pass writes 5 targets, 48 bytes per sample).
+            required_limits: wgpu::Limits {
+                max_color_attachments: adapter.limits().max_color_attachments,
+                max_color_attachment_bytes_per_sample:
+                    adapter.limits().max_color_attachment_bytes_per_sample,
+                max_storage_buffers_per_shader_stage:
+                    adapter.limits().max_storage_buffers_per_shader_stage,
+                ..wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits())
+            },
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,

@@ -10,16 +10,24 @@ use bytemuck::{Pod, Zeroable};
 pub struct FrameUniforms {
     pub view_proj: [[f32; 4]; 4],
     pub inv_view_proj: [[f32; 4]; 4],
+    pub view: [[f32; 4]; 4],
     pub camera_pos: [f32; 3],
     pub exposure: f32,
     pub viewport: [f32; 2],
     pub light_count: u32,
-    pub frame: u32,
+    /// 0 none (or stencil shadows), 1 shadow-map depth comparison, 2 Heidrich linear depth.
+    pub shadow_mode: u32,
+    /// Irradiance SH coefficients (RGB in xyz).
+    pub ambient_sh: [[f32; 4]; 9],
+    pub pcf_radius: i32,
+    pub normal_offset: f32,
+    pub linear_bias: f32,
+    pub shadow_size: f32,
 }
 
 /// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuLight {
     pub position: [f32; 3],
     pub kind: u32,
@@ -29,9 +37,52 @@ pub struct GpuLight {
     pub intensity: f32,
     pub cos_inner: f32,
     pub cos_outer: f32,
-    pub angular_radius: f32,
-    /// Which of Fuchs's attenuation functions (§4.1) the light uses.
+    pub atten_scale: f32,
+    /// 0 inverse square; 1..=4 Fuchs's atten₁..atten₄ (§4.1).
     pub attenuation: u32,
+    pub shadow_first: u32,
+    pub shadow_count: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub cascade_ends: [f32; 4],
+}
+
+/// One shadow-map layer (WGSL `ShadowView`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadowView {
+    pub view_proj: [[f32; 4]; 4],
+    pub texel_scale: f32,
+    pub ortho: u32,
+    pub far: f32,
+    pub _pad: f32,
+}
+
+/// Per-pass constants (WGSL `PassUniforms`), one 256-byte slot each (dynamic offsets).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct PassUniforms {
+    pub light_index: u32,
+    pub shadow_view: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+/// A material (WGSL `GpuMaterial`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub base_color: [f32; 4],
+    pub emissive: [f32; 3],
+    pub metallic: f32,
+    pub roughness: f32,
+    pub specular: f32,
+    pub normal_scale: f32,
+    pub alpha_cutoff: f32,
+    pub transmission: f32,
+    pub model: u32,
+    pub flags: u32,
+    pub uv_sets: u32,
 }
 
 /// The WGSL source that declares these structs.
@@ -45,38 +96,76 @@ mod tests {
 
     #[test]
     fn rust_structs_match_the_wgsl_layout() {
-        check_struct(
-            COMMON_WGSL,
-            "FrameUniforms",
-            &rust_layout!(
-                FrameUniforms,
-                view_proj,
-                inv_view_proj,
-                camera_pos,
-                exposure,
-                viewport,
-                light_count,
-                frame
+        let src = crate::raster::SHADER_SOURCE.as_str();
+        let checks = [
+            (
+                "FrameUniforms",
+                rust_layout!(
+                    FrameUniforms,
+                    view_proj,
+                    inv_view_proj,
+                    view,
+                    camera_pos,
+                    exposure,
+                    viewport,
+                    light_count,
+                    shadow_mode,
+                    ambient_sh,
+                    pcf_radius,
+                    normal_offset,
+                    linear_bias,
+                    shadow_size
+                ),
             ),
-        )
-        .unwrap();
-        check_struct(
-            COMMON_WGSL,
-            "GpuLight",
-            &rust_layout!(
-                GpuLight,
-                position,
-                kind,
-                direction,
-                range,
-                color,
-                intensity,
-                cos_inner,
-                cos_outer,
-                angular_radius,
-                attenuation
+            (
+                "GpuLight",
+                rust_layout!(
+                    GpuLight,
+                    position,
+                    kind,
+                    direction,
+                    range,
+                    color,
+                    intensity,
+                    cos_inner,
+                    cos_outer,
+                    atten_scale,
+                    attenuation,
+                    shadow_first,
+                    shadow_count,
+                    _pad0,
+                    _pad1,
+                    cascade_ends
+                ),
             ),
-        )
-        .unwrap();
+            (
+                "ShadowView",
+                rust_layout!(ShadowView, view_proj, texel_scale, ortho, far, _pad),
+            ),
+            (
+                "PassUniforms",
+                rust_layout!(PassUniforms, light_index, shadow_view, _pad0, _pad1),
+            ),
+            (
+                "GpuMaterial",
+                rust_layout!(
+                    GpuMaterial,
+                    base_color,
+                    emissive,
+                    metallic,
+                    roughness,
+                    specular,
+                    normal_scale,
+                    alpha_cutoff,
+                    transmission,
+                    model,
+                    flags,
+                    uv_sets
+                ),
+            ),
+        ];
+        for (name, layout) in checks {
+            check_struct(src, name, &layout).unwrap_or_else(|e| panic!("{e}"));
+        }
     }
 }

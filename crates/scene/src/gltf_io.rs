@@ -254,6 +254,21 @@ impl Importer<'_> {
             .extension_value("KHR_materials_diffuse_transmission")
             .and_then(|v| v.get("diffuseTransmissionFactor")?.as_f64())
             .unwrap_or(0.0) as f32;
+        let brdf = match extras_json(m.extras())
+            .and_then(|v| v.get("lightlab")?.get("brdf")?.as_str().map(str::to_owned))
+        {
+            None => BrdfModel::Pbr,
+            Some(name) => BrdfModel::parse(&name).ok_or_else(|| {
+                gltf_err(
+                    self.path,
+                    format!(
+                        "material '{}': unknown extras.lightlab.brdf '{name}' (known: {})",
+                        m.name().unwrap_or("material"),
+                        BrdfModel::NAMES.join(", ")
+                    ),
+                )
+            })?,
+        };
         Ok(Material {
             name: m.name().unwrap_or("material").into(),
             base_color: Vec4::from_array(pbr.base_color_factor()),
@@ -276,6 +291,7 @@ impl Importer<'_> {
             },
             double_sided: m.double_sided(),
             transmission,
+            brdf,
         })
     }
 
@@ -650,6 +666,9 @@ impl Writer {
             }
             if !exts.is_empty() {
                 v["extensions"] = Value::Object(exts);
+            }
+            if m.brdf != BrdfModel::Pbr {
+                v["extras"] = json!({ "lightlab": { "brdf": m.brdf.name() } });
             }
             materials.push(v);
         }

@@ -137,6 +137,56 @@ pub struct TextureRef {
     pub uv_set: u32,
 }
 
+/// The reflection model a material is shaded with, by the path tracer and the GPU techniques
+/// alike (so a real-time method can be compared with the reference of the same model).
+///
+/// The classical models take their parameters from the glTF material: diffuse reflectance
+/// ρd = (1−metallic)·base, specular reflectance ρs = mix(0.04·specular, base, metallic) (the
+/// "specular map" is the metallic–roughness texture), and the exponent from the roughness r as
+/// n = 2/r⁴ − 2, the usual Beckmann-equivalent exponent for α = r².
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Hash)]
+pub enum BrdfModel {
+    /// Lambert + GGX/Smith microfacet lobe with Schlick Fresnel (glTF metallic–roughness).
+    #[default]
+    Pbr,
+    /// Lambert only: ρd/π.
+    Lambert,
+    /// Phong: ρd/π + ρs·(n+2)/(2π)·⟨r,l⟩ⁿ (normalised, reflection vector r).
+    Phong,
+    /// Blinn-Phong as in Fuchs (2005) eq. 3: ρd/π + ρs·N(n)·⟨n,h⟩ⁿ, N normalised so that the
+    /// albedo at normal incidence is exactly ρs (`lightlab_core::brdf::BlinnPhong`).
+    BlinnPhong,
+}
+
+impl BrdfModel {
+    pub const NAMES: [&'static str; 4] = ["pbr", "lambert", "phong", "blinn-phong"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BrdfModel::Pbr => "pbr",
+            BrdfModel::Lambert => "lambert",
+            BrdfModel::Phong => "phong",
+            BrdfModel::BlinnPhong => "blinn-phong",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<BrdfModel> {
+        Some(match s {
+            "pbr" => BrdfModel::Pbr,
+            "lambert" => BrdfModel::Lambert,
+            "phong" => BrdfModel::Phong,
+            "blinn-phong" => BrdfModel::BlinnPhong,
+            _ => return None,
+        })
+    }
+
+    /// The Phong/Blinn-Phong exponent of a roughness (clamped to [1, 10⁴]).
+    pub fn exponent(roughness: f32) -> f32 {
+        let a2 = (roughness * roughness).powi(2).max(1e-6);
+        (2.0 / a2 - 2.0).clamp(1.0, 1e4)
+    }
+}
+
 /// A material: glTF metallic–roughness plus the extensions lightlab uses.
 ///
 /// The BRDF is Lambert (`(1−metallic)·base/π`, scaled by 1−F for energy balance when a specular
@@ -165,6 +215,8 @@ pub struct Material {
     /// KHR_materials_diffuse_transmission `diffuseTransmissionFactor`: the fraction of diffusely
     /// scattered light that leaves through the back side (thin foliage).
     pub transmission: f32,
+    /// The reflection model (glTF `extras.lightlab.brdf`; default the glTF model).
+    pub brdf: BrdfModel,
 }
 
 impl Default for Material {
@@ -185,6 +237,7 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
             transmission: 0.0,
+            brdf: BrdfModel::Pbr,
         }
     }
 }
@@ -377,6 +430,13 @@ impl Camera {
 }
 
 impl Scene {
+    /// Shade every material with `model` (the `--brdf` override of the command line).
+    pub fn set_brdf(&mut self, model: BrdfModel) {
+        for m in &mut self.materials {
+            m.brdf = model;
+        }
+    }
+
     /// World-space bounds of all instances (min, max); None for an empty scene.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut lo = Vec3::splat(f32::INFINITY);

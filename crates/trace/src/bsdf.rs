@@ -15,9 +15,10 @@
 
 use glam::{Vec2, Vec3, Vec4};
 use lightlab_core::brdf::Distribution;
+use lightlab_core::brdf::{BlinnPhong, Brdf, Phong};
 use lightlab_core::color::luminance;
 use lightlab_core::sampling::cosine_hemisphere;
-use lightlab_scene::{Material, Scene};
+use lightlab_scene::{BrdfModel, Material, Scene};
 use std::f32::consts::PI;
 
 #[derive(Clone, Copy, Debug)]
@@ -28,6 +29,10 @@ pub struct Bsdf {
     pub f0: Vec3,
     pub alpha: f32,
     pub specular: bool,
+    /// Which specular lobe (the material's [`BrdfModel`]).
+    pub model: BrdfModel,
+    /// Phong / Blinn-Phong exponent.
+    pub exponent: f32,
     p_spec: f32,
 }
 
@@ -62,19 +67,22 @@ impl Bsdf {
         let base = base.truncate();
         let f0d = 0.04 * material.specular;
         let f0 = Vec3::splat(f0d).lerp(base, metallic);
-        let specular = metallic > 0.0 || material.specular > 0.0;
+        let model = material.brdf;
+        let specular = model != BrdfModel::Lambert && (metallic > 0.0 || material.specular > 0.0);
         let fd = schlick(wo_z, Vec3::splat(f0d)).x;
         let kd_scale = (1.0 - metallic)
-            * if material.specular > 0.0 {
+            * if material.specular > 0.0 && model == BrdfModel::Pbr {
                 1.0 - fd
             } else {
                 1.0
             };
         let alpha = (roughness * roughness).max(1e-3);
-        let ws = if specular {
+        let ws = if !specular {
+            0.0
+        } else if model == BrdfModel::Pbr {
             luminance(schlick(wo_z, f0))
         } else {
-            0.0
+            luminance(f0)
         };
         let wd = luminance(base) * kd_scale;
         let p_spec = if !specular {
@@ -91,7 +99,28 @@ impl Bsdf {
             f0,
             alpha,
             specular,
+            model,
+            exponent: BrdfModel::exponent(roughness),
             p_spec,
+        }
+    }
+
+    /// The classical lobes of [`BrdfModel::Phong`] and [`BrdfModel::BlinnPhong`], from core
+    /// (normalised, unit reflectance; scaled by `f0` as the specular colour).
+    fn classic<R>(&self, f: impl FnOnce(&dyn Brdf) -> R) -> Option<R> {
+        let n = self.exponent as f64;
+        match self.model {
+            BrdfModel::Phong => Some(f(&Phong {
+                ks: 1.0,
+                exponent: n,
+                normalized: true,
+            })),
+            BrdfModel::BlinnPhong => Some(f(&BlinnPhong {
+                ks: 1.0,
+                exponent: n,
+                normalized: true,
+            })),
+            _ => None,
         }
     }
 
@@ -103,6 +132,9 @@ impl Bsdf {
         }
         let mut f = diffuse * (1.0 - self.transmission);
         if self.specular && wo.z > 0.0 {
+            if let Some(c) = self.classic(|b| b.eval(wi.as_dvec3(), wo.as_dvec3())) {
+                return f + self.f0 * c as f32;
+            }
             let h = (wo + wi).normalize();
             let ggx = self.ggx();
             let d = ggx.d(h.z as f64) as f32;
@@ -120,11 +152,13 @@ impl Bsdf {
         } else {
             self.transmission * -wi.z / PI
         };
-        let ps = if self.specular && wi.z > 0.0 && wo.z > 0.0 {
+        let ps = if !(self.specular && wi.z > 0.0 && wo.z > 0.0) {
+            0.0
+        } else if let Some(p) = self.classic(|b| b.pdf(wo.as_dvec3(), wi.as_dvec3())) {
+            p as f32
+        } else {
             let h = (wo + wi).normalize();
             self.ggx().d(h.z as f64) as f32 * h.z / (4.0 * wo.dot(h).abs().max(1e-8))
-        } else {
-            0.0
         };
         self.p_spec * ps + (1.0 - self.p_spec) * pd
     }
@@ -132,12 +166,16 @@ impl Bsdf {
     /// Sample an incident direction: (wi, f, pdf), or None when the sample is invalid.
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
         let wi = if u_lobe < self.p_spec {
-            let h = self.ggx().sample_h(u.as_dvec2()).as_vec3();
-            let wi = 2.0 * wo.dot(h) * h - wo;
-            if wi.z <= 0.0 {
-                return None;
+            if let Some(wi) = self.classic(|b| b.sample(wo.as_dvec3(), u.as_dvec2())) {
+                wi?.as_vec3()
+            } else {
+                let h = self.ggx().sample_h(u.as_dvec2()).as_vec3();
+                let wi = 2.0 * wo.dot(h) * h - wo;
+                if wi.z <= 0.0 {
+                    return None;
+                }
+                wi
             }
-            wi
         } else {
             // Reuse u_lobe's remaining randomness to choose front or back.
             let u2 = (u_lobe - self.p_spec) / (1.0 - self.p_spec);
@@ -191,6 +229,22 @@ mod tests {
                 base_color: Vec4::new(0.9, 0.8, 0.5, 1.0),
                 roughness: 0.5,
                 metallic: 1.0,
+                ..Default::default()
+            },
+            Material {
+                name: "blinn-phong".into(),
+                base_color: Vec4::new(0.2, 0.3, 0.8, 1.0),
+                roughness: 0.4,
+                specular: 10.0,
+                brdf: BrdfModel::BlinnPhong,
+                ..Default::default()
+            },
+            Material {
+                name: "phong".into(),
+                base_color: Vec4::new(0.5, 0.3, 0.2, 1.0),
+                roughness: 0.5,
+                specular: 10.0,
+                brdf: BrdfModel::Phong,
                 ..Default::default()
             },
             Material {

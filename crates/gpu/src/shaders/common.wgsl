@@ -1,36 +1,245 @@
-// Shared GPU-visible structs of lightlab's real-time techniques. Their Rust twins live in
+// Shared GPU-visible structs and functions of lightlab's real-time techniques. Every technique's
+// WGSL file is compiled as this file followed by its own. The Rust twins of the structs live in
 // `crates/gpu/src/uniforms.rs` and are checked against naga's layout of this file in a test.
+
+const PI: f32 = 3.14159265358979;
 
 struct FrameUniforms {
     view_proj: mat4x4<f32>,
     inv_view_proj: mat4x4<f32>,
+    view: mat4x4<f32>,
     camera_pos: vec3<f32>,
     exposure: f32,
     viewport: vec2<f32>,
     light_count: u32,
-    frame: u32,
+    // 0 none / stencil, 1 shadow map (depth compare), 2 Heidrich's linear-depth comparison.
+    shadow_mode: u32,
+    // Irradiance as 9 SH coefficients (RGB in xyz): E(n) = Σ c_k·Y_k(n).
+    ambient_sh: array<vec4<f32>, 9>,
+    // PCF kernel half-width in texels (0 = one bilinear comparison).
+    pcf_radius: i32,
+    // Normal-offset bias in shadow-map texels.
+    normal_offset: f32,
+    // Heidrich variant: bias on the normalised linear depth.
+    linear_bias: f32,
+    shadow_size: f32,
 }
 
-// One light. kind: 0 point, 1 spot, 2 directional. Spot cones as cosines; `range` 0 = infinite.
+// One light. kind: 0 point, 1 spot, 2 directional. Spot cones as cosines.
+// attenuation: 0 inverse square (glTF range window), 1..4 Fuchs (2005) §4.1 atten₁..atten₄.
 struct GpuLight {
     position: vec3<f32>,
     kind: u32,
     direction: vec3<f32>,
+    // Radius r of the attenuation functions and of culling; 0 = infinite.
     range: f32,
     color: vec3<f32>,
     intensity: f32,
     cos_inner: f32,
     cos_outer: f32,
-    angular_radius: f32,
+    // Normalisation of the Fuchs attenuation functions (see `lights.rs`).
+    atten_scale: f32,
     attenuation: u32,
+    // First shadow view of this light and how many (spot 1, point 6, directional cascades).
+    shadow_first: u32,
+    shadow_count: u32,
+    _pad0: u32,
+    _pad1: u32,
+    // View-space distances ending the cascades of a directional light.
+    cascade_ends: vec4<f32>,
 }
 
-@group(0) @binding(0) var<uniform> frame_uniforms: FrameUniforms;
-@group(0) @binding(1) var<storage, read> lights: array<GpuLight>;
+// One rendered shadow-map layer.
+struct ShadowView {
+    view_proj: mat4x4<f32>,
+    // World size of one texel: at unit distance (perspective) or everywhere (orthographic).
+    texel_scale: f32,
+    ortho: u32,
+    // Far distance of a perspective view (normalises Heidrich's linear depth).
+    far: f32,
+    _pad: f32,
+}
 
-// Keeps both declarations alive for validation until a technique includes this file.
-@compute @workgroup_size(1)
-fn touch() {
-    let l = lights[0];
-    _ = frame_uniforms.exposure + l.intensity;
+// Per-pass constants, addressed with a dynamic offset.
+struct PassUniforms {
+    light_index: u32,
+    shadow_view: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+struct GpuMaterial {
+    base_color: vec4<f32>,
+    emissive: vec3<f32>,
+    metallic: f32,
+    roughness: f32,
+    specular: f32,
+    normal_scale: f32,
+    // < 0: opaque; otherwise alpha-test threshold.
+    alpha_cutoff: f32,
+    transmission: f32,
+    // 0 pbr, 1 lambert, 2 phong, 3 blinn-phong.
+    model: u32,
+    // bit 0 base colour, 1 metallic-roughness, 2 normal, 3 emissive texture; bit 4 double-sided.
+    flags: u32,
+    // 1 bit per texture (same order): which UV set.
+    uv_sets: u32,
+}
+
+// What the lighting passes need of a visible surface point.
+struct Surface {
+    p: vec3<f32>,
+    // Shading normal and geometric normal, both turned towards the viewer.
+    n: vec3<f32>,
+    ng: vec3<f32>,
+    // Diffuse reflectance (1 − metallic)·base.
+    diffuse: vec3<f32>,
+    // Specular reflectance (F0) and the dielectric F0 that scales the diffuse lobe.
+    f0: vec3<f32>,
+    f0d: f32,
+    roughness: f32,
+    model: u32,
+    transmission: f32,
+}
+
+fn sh9(n: vec3<f32>) -> array<f32, 9> {
+    return array<f32, 9>(
+        0.282094792,
+        0.488602512 * n.y,
+        0.488602512 * n.z,
+        0.488602512 * n.x,
+        1.092548431 * n.x * n.y,
+        1.092548431 * n.y * n.z,
+        0.315391565 * (3.0 * n.z * n.z - 1.0),
+        1.092548431 * n.x * n.z,
+        0.546274215 * (n.x * n.x - n.y * n.y),
+    );
+}
+
+fn schlick(c: f32, f0: vec3<f32>) -> vec3<f32> {
+    let m = pow(1.0 - clamp(c, 0.0, 1.0), 5.0);
+    return f0 + (vec3<f32>(1.0) - f0) * m;
+}
+
+// Phong / Blinn-Phong exponent of a roughness (as `BrdfModel::exponent`).
+fn phong_exponent(roughness: f32) -> f32 {
+    let a2 = max(pow(roughness * roughness, 2.0), 1e-6);
+    return clamp(2.0 / a2 - 2.0, 1.0, 1e4);
+}
+
+fn ggx_lambda(c: f32, a: f32) -> f32 {
+    let c2 = max(c * c, 1e-12);
+    let t2 = max(1.0 - c2, 0.0) / c2;
+    return 0.5 * (-1.0 + sqrt(1.0 + a * a * t2));
+}
+
+// f(v, l)·⟨n,l⟩ for the front side, the same models as the path tracer (`trace::bsdf`).
+fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
+    let nl = dot(s.n, l);
+    let nv = dot(s.n, v);
+    if nl <= 0.0 || nv <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    var kd = 1.0;
+    if s.model == 0u && s.f0d > 0.0 {
+        kd = 1.0 - schlick(nv, vec3<f32>(s.f0d)).x;
+    }
+    var f = s.diffuse * (kd * (1.0 - s.transmission) / PI);
+    if s.model == 1u || all(s.f0 <= vec3<f32>(0.0)) {
+        return f * nl;
+    }
+    if s.model == 0u {
+        let h = normalize(v + l);
+        let a = max(s.roughness * s.roughness, 1e-3);
+        let a2 = a * a;
+        let nh = max(dot(s.n, h), 0.0);
+        let dd = nh * nh * (a2 - 1.0) + 1.0;
+        let d = a2 / (PI * dd * dd);
+        let g = 1.0 / (1.0 + ggx_lambda(nv, a) + ggx_lambda(nl, a));
+        f += schlick(dot(v, h), s.f0) * (d * g / (4.0 * nv * nl));
+    } else if s.model == 2u {
+        let e = phong_exponent(s.roughness);
+        let r = 2.0 * nv * s.n - v;
+        f += s.f0 * ((e + 2.0) / (2.0 * PI) * pow(max(dot(r, l), 0.0), e));
+    } else {
+        let e = phong_exponent(s.roughness);
+        let h = normalize(v + l);
+        let norm = (e + 2.0) * (e + 4.0) / (8.0 * PI * (exp2(-e / 2.0) + e));
+        f += s.f0 * (norm * pow(max(dot(s.n, h), 0.0), e));
+    }
+    return f * nl;
+}
+
+// Fuchs (2005) §4.1 attenuation functions of d/r; atten₃ clamps before squaring (erratum).
+fn fuchs_attenuation(kind: u32, d: f32, r: f32) -> f32 {
+    let x = d / r;
+    switch kind {
+        case 1u: {
+            // atten₁ = min(1, 1/(b·d)), b = 0.5 m⁻¹ (see `lights.rs`)
+            return min(1.0, 1.0 / (0.5 * d));
+        }
+        case 2u: {
+            return max(1.0 - x, 0.0);
+        }
+        case 3u: {
+            let t = max(1.0 - x, 0.0);
+            return t * t;
+        }
+        default: {
+            return max(1.0 - x * x, 0.0);
+        }
+    }
+}
+
+// Incident irradiance at normal incidence (RGB) and the unit direction to the light.
+fn light_incidence(li: GpuLight, p: vec3<f32>) -> vec4<f32> {
+    if li.kind == 2u {
+        return vec4<f32>(li.intensity, 0.0, 0.0, 0.0);
+    }
+    let to = li.position - p;
+    let d2 = max(dot(to, to), 1e-12);
+    let d = sqrt(d2);
+    var e = 0.0;
+    if li.attenuation == 0u {
+        var window = 1.0;
+        if li.range > 0.0 {
+            let q = d / li.range;
+            let w = clamp(1.0 - q * q * q * q, 0.0, 1.0);
+            window = w * w;
+        }
+        e = li.intensity * window / d2;
+    } else {
+        e = li.intensity * li.atten_scale * fuchs_attenuation(li.attenuation, d, max(li.range, 1e-6));
+    }
+    if li.kind == 1u {
+        let cd = dot(li.direction, -to / d);
+        let t = clamp((cd - li.cos_outer) / max(li.cos_inner - li.cos_outer, 1e-4), 0.0, 1.0);
+        e *= t * t;
+    }
+    return vec4<f32>(e, 0.0, 0.0, 0.0);
+}
+
+fn light_dir(li: GpuLight, p: vec3<f32>) -> vec3<f32> {
+    if li.kind == 2u {
+        return -li.direction;
+    }
+    return normalize(li.position - p);
+}
+
+// Radiance towards the viewer from one light (visibility not included).
+fn shade_light(s: Surface, li: GpuLight, v: vec3<f32>) -> vec3<f32> {
+    let l = light_dir(li, s.p);
+    let e = light_incidence(li, s.p).x;
+    if e <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let ngl = dot(s.ng, l);
+    var c = vec3<f32>(0.0);
+    if ngl > 0.0 {
+        c = brdf_cos(s, v, l);
+    } else if s.transmission > 0.0 {
+        // Thin diffuse transmission: light from behind leaves towards the viewer.
+        c = s.diffuse * (s.transmission / PI) * max(-dot(s.n, l), 0.0);
+    }
+    return c * li.color * e;
 }

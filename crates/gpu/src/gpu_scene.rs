@@ -1,0 +1,395 @@
+//! A scene on the GPU: world-space vertex and index buffers (instances flattened, since
+//! lightlab's scenes are static), one draw per instance, materials with mip-mapped textures,
+//! and per-instance edge adjacency for shadow volumes.
+
+use crate::shadow_volume::VolumeMesh;
+use crate::uniforms::GpuMaterial;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat3, Vec3, Vec4};
+use lightlab_scene::{AlphaMode, Scene, Texture};
+use wgpu::util::DeviceExt;
+
+/// One vertex (WGSL `VertexIn`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub tangent: [f32; 4],
+    pub uv0: [f32; 2],
+    pub uv1: [f32; 2],
+}
+
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Float32x2
+];
+
+pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<Vertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &VERTEX_ATTRIBUTES,
+    }
+}
+
+/// One instance: a range of the index buffer with one material.
+#[derive(Clone, Debug)]
+pub struct Draw {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub material: usize,
+    pub bounds: (Vec3, Vec3),
+    /// Adjacency for shadow volumes; None for materials that cannot cast them (alpha masks).
+    pub volume: Option<VolumeMesh>,
+}
+
+pub struct GpuMaterialBinding {
+    pub bind_group: wgpu::BindGroup,
+    pub double_sided: bool,
+    pub alpha_masked: bool,
+}
+
+pub struct GpuScene {
+    pub vertices: wgpu::Buffer,
+    pub indices: wgpu::Buffer,
+    pub draws: Vec<Draw>,
+    pub materials: Vec<GpuMaterialBinding>,
+    pub bounds: (Vec3, Vec3),
+    pub triangles: usize,
+}
+
+/// The material bind group layout (WGSL group 1).
+pub fn material_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let tex = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("material"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            tex(1),
+            tex(2),
+            tex(3),
+            tex(4),
+            wgpu::BindGroupLayoutEntry {
+                binding: 5,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ],
+    })
+}
+
+/// Box-filtered mip chain of a linear RGBA texture, as f16.
+fn mip_chain(t: &Texture) -> Vec<(u32, u32, Vec<half::f16>)> {
+    let mut levels = vec![];
+    let (mut w, mut h) = (t.width.max(1), t.height.max(1));
+    let mut cur: Vec<Vec4> = t.data.clone();
+    loop {
+        levels.push((
+            w,
+            h,
+            cur.iter()
+                .flat_map(|c| c.to_array().map(half::f16::from_f32))
+                .collect(),
+        ));
+        if w == 1 && h == 1 {
+            break;
+        }
+        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+        let mut next = vec![Vec4::ZERO; (nw * nh) as usize];
+        for y in 0..nh {
+            for x in 0..nw {
+                let mut s = Vec4::ZERO;
+                let mut n = 0.0;
+                for dy in 0..2 {
+                    for dx in 0..2 {
+                        let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
+                        s += cur[(sy * w + sx) as usize];
+                        n += 1.0;
+                    }
+                }
+                next[(y * nw + x) as usize] = s / n;
+            }
+        }
+        cur = next;
+        w = nw;
+        h = nh;
+    }
+    levels
+}
+
+fn upload_texture(device: &wgpu::Device, queue: &wgpu::Queue, t: &Texture) -> wgpu::TextureView {
+    let levels = mip_chain(t);
+    let tex = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(&t.name),
+        size: wgpu::Extent3d {
+            width: t.width.max(1),
+            height: t.height.max(1),
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: levels.len() as u32,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba16Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for (level, (w, h, data)) in levels.iter().enumerate() {
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &tex,
+                mip_level: level as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(data),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 8),
+                rows_per_image: Some(*h),
+            },
+            wgpu::Extent3d {
+                width: *w,
+                height: *h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    tex.create_view(&Default::default())
+}
+
+impl GpuScene {
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> GpuScene {
+        let mut vertices: Vec<Vertex> = vec![];
+        let mut indices: Vec<u32> = vec![];
+        let mut draws = vec![];
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for inst in &scene.instances {
+            let mesh = &scene.meshes[inst.mesh];
+            let nm = inst.normal_matrix();
+            let m3 = Mat3::from_mat4(inst.transform);
+            let flip = if m3.determinant() < 0.0 { -1.0 } else { 1.0 };
+            let base = vertices.len() as u32;
+            let (mut dlo, mut dhi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+            let mut world = Vec::with_capacity(mesh.positions.len());
+            for (i, p) in mesh.positions.iter().enumerate() {
+                let w = inst.transform.transform_point3(*p);
+                world.push(w);
+                dlo = dlo.min(w);
+                dhi = dhi.max(w);
+                let n = mesh
+                    .normals
+                    .get(i)
+                    .map(|n| (nm * *n).normalize_or_zero())
+                    .unwrap_or(Vec3::Y);
+                let t = mesh
+                    .tangents
+                    .get(i)
+                    .map_or(Vec4::new(1.0, 0.0, 0.0, 1.0), |t| {
+                        (m3 * t.truncate()).normalize_or_zero().extend(t.w * flip)
+                    });
+                vertices.push(Vertex {
+                    position: w.to_array(),
+                    normal: n.to_array(),
+                    tangent: t.to_array(),
+                    uv0: mesh.uv0.get(i).map_or([0.0; 2], |u| u.to_array()),
+                    uv1: mesh
+                        .uv1
+                        .as_ref()
+                        .and_then(|u| u.get(i))
+                        .map_or([0.0; 2], |u| u.to_array()),
+                });
+            }
+            let first_index = indices.len() as u32;
+            // A mirroring transform flips the winding: restore counter-clockwise.
+            for t in mesh.indices.chunks_exact(3) {
+                if flip < 0.0 {
+                    indices.extend([base + t[0], base + t[2], base + t[1]]);
+                } else {
+                    indices.extend([base + t[0], base + t[1], base + t[2]]);
+                }
+            }
+            lo = lo.min(dlo);
+            hi = hi.max(dhi);
+            let material = &scene.materials[mesh.material];
+            let casts_volume = material.alpha_mode == AlphaMode::Opaque;
+            let local: Vec<u32> = indices[first_index as usize..]
+                .iter()
+                .map(|i| i - base)
+                .collect();
+            draws.push(Draw {
+                first_index,
+                index_count: mesh.indices.len() as u32,
+                material: mesh.material,
+                bounds: (dlo, dhi),
+                volume: casts_volume.then(|| VolumeMesh::new(&world, &local)),
+            });
+        }
+        if vertices.is_empty() {
+            lo = Vec3::ZERO;
+            hi = Vec3::ZERO;
+            // wgpu does not allow empty buffers to be bound as vertex buffers.
+            vertices.push(Vertex::zeroed());
+            indices.extend([0, 0, 0]);
+        }
+        let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let ib = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+
+        let layout = material_layout(device);
+        let white = upload_texture(
+            device,
+            queue,
+            &Texture {
+                name: "white".into(),
+                width: 1,
+                height: 1,
+                data: vec![Vec4::ONE],
+                srgb: false,
+            },
+        );
+        let textures: Vec<wgpu::TextureView> = scene
+            .textures
+            .iter()
+            .map(|t| upload_texture(device, queue, t))
+            .collect();
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("material"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            address_mode_w: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            anisotropy_clamp: 8,
+            ..Default::default()
+        });
+        let fallback = [lightlab_scene::Material::default()];
+        let list: &[lightlab_scene::Material] = if scene.materials.is_empty() {
+            &fallback
+        } else {
+            &scene.materials
+        };
+        let materials = list
+            .iter()
+            .map(|m| {
+                let refs = [
+                    m.base_color_texture,
+                    m.metallic_roughness_texture,
+                    m.normal_texture,
+                    m.emissive_texture,
+                ];
+                let mut flags = 0u32;
+                let mut uv_sets = 0u32;
+                for (i, r) in refs.iter().enumerate() {
+                    if let Some(r) = r {
+                        flags |= 1 << i;
+                        uv_sets |= (r.uv_set & 1) << i;
+                    }
+                }
+                if m.double_sided {
+                    flags |= 16;
+                }
+                let gm = GpuMaterial {
+                    base_color: m.base_color.to_array(),
+                    emissive: (m.emissive * m.emissive_strength).to_array(),
+                    metallic: m.metallic,
+                    roughness: m.roughness,
+                    specular: m.specular,
+                    normal_scale: m.normal_scale,
+                    alpha_cutoff: match m.alpha_mode {
+                        AlphaMode::Mask { cutoff } => cutoff,
+                        // Blended surfaces are drawn as alpha-tested at ½ (no sorting yet).
+                        AlphaMode::Blend => 0.5,
+                        AlphaMode::Opaque => -1.0,
+                    },
+                    transmission: m.transmission,
+                    model: match m.brdf {
+                        lightlab_scene::BrdfModel::Pbr => 0,
+                        lightlab_scene::BrdfModel::Lambert => 1,
+                        lightlab_scene::BrdfModel::Phong => 2,
+                        lightlab_scene::BrdfModel::BlinnPhong => 3,
+                    },
+                    flags,
+                    uv_sets,
+                };
+                let ubuf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(&m.name),
+                    contents: bytemuck::bytes_of(&gm),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                let view = |r: Option<lightlab_scene::TextureRef>| {
+                    r.map_or(&white, |r| &textures[r.texture])
+                };
+                let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(&m.name),
+                    layout: &layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: ubuf.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(view(refs[0])),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(view(refs[1])),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: wgpu::BindingResource::TextureView(view(refs[2])),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 4,
+                            resource: wgpu::BindingResource::TextureView(view(refs[3])),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 5,
+                            resource: wgpu::BindingResource::Sampler(&sampler),
+                        },
+                    ],
+                });
+                GpuMaterialBinding {
+                    bind_group,
+                    double_sided: m.double_sided,
+                    alpha_masked: m.alpha_mode != AlphaMode::Opaque,
+                }
+            })
+            .collect();
+        GpuScene {
+            vertices: vb,
+            indices: ib,
+            triangles: draws.iter().map(|d| d.index_count as usize / 3).sum(),
+            draws,
+            materials,
+            bounds: (lo, hi),
+        }
+    }
+}

@@ -1,0 +1,416 @@
+// Rasterised lighting (issue 4): forward and deferred Phong after Fuchs (2005) §4.1, stencil
+// shadow volumes, shadow maps (depth comparison and Heidrich's linear-depth variant), projected
+// planar shadows. Compiled after common.wgsl.
+//
+// Bind groups: 0 frame (uniforms, lights, shadow views, per-pass uniforms), 1 material,
+// 2 shadow maps, 3 G-buffer (deferred lighting only).
+
+@group(0) @binding(0) var<uniform> frame: FrameUniforms;
+@group(0) @binding(1) var<storage, read> lights: array<GpuLight>;
+@group(0) @binding(2) var<storage, read> shadow_views: array<ShadowView>;
+@group(0) @binding(3) var<uniform> pass_u: PassUniforms;
+
+@group(1) @binding(0) var<uniform> material: GpuMaterial;
+@group(1) @binding(1) var base_tex: texture_2d<f32>;
+@group(1) @binding(2) var mr_tex: texture_2d<f32>;
+@group(1) @binding(3) var normal_tex: texture_2d<f32>;
+@group(1) @binding(4) var emissive_tex: texture_2d<f32>;
+@group(1) @binding(5) var tex_sampler: sampler;
+
+@group(2) @binding(0) var shadow_depth: texture_depth_2d_array;
+@group(2) @binding(1) var shadow_cmp: sampler_comparison;
+@group(2) @binding(2) var shadow_linear: texture_2d_array<f32>;
+
+@group(3) @binding(0) var gb_diffuse: texture_2d<f32>;
+@group(3) @binding(1) var gb_normal: texture_2d<f32>;
+@group(3) @binding(2) var gb_specular: texture_2d<f32>;
+@group(3) @binding(3) var gb_position: texture_2d<f32>;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) tangent: vec4<f32>,
+    @location(3) uv0: vec2<f32>,
+    @location(4) uv1: vec2<f32>,
+}
+
+struct VertexOut {
+    @invariant @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) tangent: vec4<f32>,
+    @location(3) uv0: vec2<f32>,
+    @location(4) uv1: vec2<f32>,
+}
+
+@vertex
+fn scene_vs(v: VertexIn) -> VertexOut {
+    var o: VertexOut;
+    o.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    o.world = v.position;
+    o.normal = v.normal;
+    o.tangent = v.tangent;
+    o.uv0 = v.uv0;
+    o.uv1 = v.uv1;
+    return o;
+}
+
+fn uv_for(i: u32, in: VertexOut) -> vec2<f32> {
+    if ((material.uv_sets >> i) & 1u) == 1u {
+        return in.uv1;
+    }
+    return in.uv0;
+}
+
+fn base_color(in: VertexOut) -> vec4<f32> {
+    var c = material.base_color;
+    if (material.flags & 1u) != 0u {
+        c *= textureSample(base_tex, tex_sampler, uv_for(0u, in));
+    }
+    return c;
+}
+
+fn alpha_test(in: VertexOut) {
+    if material.alpha_cutoff >= 0.0 && base_color(in).a < material.alpha_cutoff {
+        discard;
+    }
+}
+
+// The surface of a rasterised fragment: textures, normal map, normals turned to the viewer.
+fn surface(in: VertexOut, front: bool) -> Surface {
+    var s: Surface;
+    s.p = in.world;
+    let base = base_color(in);
+    var metallic = material.metallic;
+    var roughness = material.roughness;
+    if (material.flags & 2u) != 0u {
+        let t = textureSample(mr_tex, tex_sampler, uv_for(1u, in));
+        roughness *= t.y;
+        metallic *= t.z;
+    }
+    var ng = normalize(cross(dpdx(in.world), dpdy(in.world)));
+    let v = frame.camera_pos - in.world;
+    if dot(ng, v) < 0.0 {
+        ng = -ng;
+    }
+    var n = normalize(in.normal);
+    if !front {
+        n = -n;
+    }
+    if (material.flags & 4u) != 0u {
+        let t = textureSample(normal_tex, tex_sampler, uv_for(2u, in)).xyz * 2.0 - 1.0;
+        let tn = normalize(vec3<f32>(t.xy * material.normal_scale, t.z));
+        var tg = in.tangent.xyz - n * dot(in.tangent.xyz, n);
+        if dot(tg, tg) > 1e-12 {
+            tg = normalize(tg);
+            let bt = cross(n, tg) * in.tangent.w;
+            n = normalize(tg * tn.x + bt * tn.y + n * tn.z);
+        }
+    }
+    // Interpolated normals can face away from the viewer at silhouettes: keep them in front.
+    if dot(n, v) < 0.0 {
+        n = normalize(n - ng * (dot(n, ng) - 1e-3));
+    }
+    s.n = n;
+    s.ng = ng;
+    s.diffuse = base.rgb * (1.0 - metallic);
+    s.f0d = 0.04 * material.specular;
+    s.f0 = mix(vec3<f32>(s.f0d), base.rgb, metallic);
+    if material.model == 1u {
+        s.f0 = vec3<f32>(0.0);
+    }
+    s.roughness = roughness;
+    s.model = material.model;
+    s.transmission = material.transmission;
+    return s;
+}
+
+fn emission(in: VertexOut) -> vec3<f32> {
+    var e = material.emissive;
+    if (material.flags & 8u) != 0u {
+        e *= textureSample(emissive_tex, tex_sampler, uv_for(3u, in)).rgb;
+    }
+    return e;
+}
+
+fn ambient(s: Surface) -> vec3<f32> {
+    let y = sh9(s.n);
+    var e = vec3<f32>(0.0);
+    for (var k = 0u; k < 9u; k++) {
+        e += frame.ambient_sh[k].xyz * y[k];
+    }
+    return s.diffuse / PI * max(e, vec3<f32>(0.0));
+}
+
+// ---- shadow maps -------------------------------------------------------------------------------
+
+fn shadow_view_index(li: GpuLight, p: vec3<f32>) -> u32 {
+    var i = li.shadow_first;
+    if li.kind == 0u {
+        let d = p - li.position;
+        let a = abs(d);
+        if a.x >= a.y && a.x >= a.z {
+            i += select(1u, 0u, d.x > 0.0);
+        } else if a.y >= a.z {
+            i += select(3u, 2u, d.y > 0.0);
+        } else {
+            i += select(5u, 4u, d.z > 0.0);
+        }
+    } else if li.kind == 2u {
+        let vz = -(frame.view * vec4<f32>(p, 1.0)).z;
+        var c = 0u;
+        for (var k = 0u; k + 1u < li.shadow_count; k++) {
+            if vz > li.cascade_ends[k] {
+                c = k + 1u;
+            }
+        }
+        i += c;
+    }
+    return i;
+}
+
+// Fraction of the light that reaches p (1 = lit), from the light's shadow maps.
+fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
+    if li.shadow_count == 0u || frame.shadow_mode == 0u {
+        return 1.0;
+    }
+    let vi = shadow_view_index(li, p);
+    let sv = shadow_views[vi];
+    var texel = sv.texel_scale;
+    if sv.ortho == 0u {
+        texel *= length(p - li.position);
+    }
+    // Normal-offset bias: move the lookup point off the surface by a few texels.
+    let q = p + ng * (frame.normal_offset * texel);
+    let clip = sv.view_proj * vec4<f32>(q, 1.0);
+    if clip.w <= 0.0 {
+        return 1.0;
+    }
+    let ndc = clip.xyz / clip.w;
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) || ndc.z > 1.0 {
+        return 1.0;
+    }
+    let r = frame.pcf_radius;
+    let inv = 1.0 / frame.shadow_size;
+    var sum = 0.0;
+    var count = 0.0;
+    if frame.shadow_mode == 1u {
+        for (var y = -r; y <= r; y++) {
+            for (var x = -r; x <= r; x++) {
+                let o = vec2<f32>(f32(x), f32(y)) * inv;
+                sum += textureSampleCompareLevel(shadow_depth, shadow_cmp, uv + o, i32(vi), ndc.z);
+                count += 1.0;
+            }
+        }
+    } else {
+        // Heidrich (1999) ch. 6: compare linear depths (distance to the light, or the
+        // orthographic depth), which are uniform in precision, instead of post-projective z.
+        var depth = ndc.z;
+        if sv.ortho == 0u {
+            depth = length(q - li.position) / sv.far;
+        }
+        let size = i32(frame.shadow_size);
+        let c = vec2<i32>(uv * frame.shadow_size);
+        for (var y = -r; y <= r; y++) {
+            for (var x = -r; x <= r; x++) {
+                let t = clamp(c + vec2<i32>(x, y), vec2<i32>(0), vec2<i32>(size - 1));
+                let stored = textureLoad(shadow_linear, t, i32(vi), 0).x;
+                sum += select(0.0, 1.0, depth - frame.linear_bias <= stored);
+                count += 1.0;
+            }
+        }
+    }
+    return sum / count;
+}
+
+// ---- forward path ------------------------------------------------------------------------------
+
+// Depth + the light-independent terms: ambient (diffuse·irradiance) and emission.
+@fragment
+fn ambient_fs(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    alpha_test(in);
+    let s = surface(in, front);
+    return vec4<f32>(ambient(s) + emission(in), 1.0);
+}
+
+// One light's contribution, blended additively (one pass per light, Fuchs §4.4).
+@fragment
+fn light_fs(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    alpha_test(in);
+    let s = surface(in, front);
+    let li = lights[pass_u.light_index];
+    let v = normalize(frame.camera_pos - s.p);
+    let vis = shadow_map_visibility(li, s.p, s.ng);
+    return vec4<f32>(shade_light(s, li, v) * vis, 0.0);
+}
+
+// ---- deferred path -----------------------------------------------------------------------------
+
+struct GBufferOut {
+    @location(0) accum: vec4<f32>,
+    @location(1) diffuse: vec4<f32>,
+    @location(2) normal: vec4<f32>,
+    @location(3) specular: vec4<f32>,
+    @location(4) position: vec4<f32>,
+}
+
+@fragment
+fn gbuffer_fs(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    alpha_test(in);
+    let s = surface(in, front);
+    var o: GBufferOut;
+    o.accum = vec4<f32>(ambient(s) + emission(in), 1.0);
+    o.diffuse = vec4<f32>(s.diffuse, s.f0d);
+    o.normal = vec4<f32>(s.n, s.roughness);
+    o.specular = vec4<f32>(s.f0, f32(s.model) + min(s.transmission, 0.99));
+    o.position = vec4<f32>(s.p, 1.0);
+    // The geometric normal is not stored: the deferred path uses the shading normal for the
+    // horizon test (documented deviation; the forward path is the exact one).
+    return o;
+}
+
+struct FullscreenOut {
+    @builtin(position) clip: vec4<f32>,
+}
+
+@vertex
+fn fullscreen_vs(@builtin(vertex_index) i: u32) -> FullscreenOut {
+    var o: FullscreenOut;
+    let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
+    o.clip = vec4<f32>(xy, 0.0, 1.0);
+    return o;
+}
+
+fn gbuffer_surface(c: vec2<i32>) -> Surface {
+    var s: Surface;
+    let d = textureLoad(gb_diffuse, c, 0);
+    let n = textureLoad(gb_normal, c, 0);
+    let sp = textureLoad(gb_specular, c, 0);
+    s.p = textureLoad(gb_position, c, 0).xyz;
+    s.n = normalize(n.xyz);
+    s.ng = s.n;
+    s.diffuse = d.rgb;
+    s.f0d = d.a;
+    s.f0 = sp.rgb;
+    s.roughness = n.w;
+    s.model = u32(floor(sp.a));
+    s.transmission = fract(sp.a);
+    return s;
+}
+
+@fragment
+fn deferred_light_fs(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let c = vec2<i32>(in.clip.xy);
+    if textureLoad(gb_position, c, 0).w == 0.0 {
+        discard;
+    }
+    let s = gbuffer_surface(c);
+    let li = lights[pass_u.light_index];
+    let v = normalize(frame.camera_pos - s.p);
+    let vis = shadow_map_visibility(li, s.p, s.ng);
+    return vec4<f32>(shade_light(s, li, v) * vis, 0.0);
+}
+
+// ---- stencil shadow volumes --------------------------------------------------------------------
+
+// Volume vertices in homogeneous world coordinates: w = 0 for points extruded to infinity.
+@vertex
+fn volume_vs(@location(0) p: vec4<f32>) -> @invariant @builtin(position) vec4<f32> {
+    return frame.view_proj * p;
+}
+
+// Volumes write only the stencil (colour writes are masked off).
+@fragment
+fn volume_fs() -> @location(0) vec4<f32> {
+    return vec4<f32>(0.0);
+}
+
+// Writes 1 where the current stencil test passes (shadow masks for tests and debug views).
+@fragment
+fn mask_fs(in: FullscreenOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(1.0);
+}
+
+// Shadow-map visibility of the G-buffer point, thresholded at ½ (tests and debug views).
+@fragment
+fn shadow_map_mask_fs(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let c = vec2<i32>(in.clip.xy);
+    if textureLoad(gb_position, c, 0).w == 0.0 {
+        discard;
+    }
+    let s = gbuffer_surface(c);
+    let li = lights[pass_u.light_index];
+    let vis = shadow_map_visibility(li, s.p, s.n);
+    return vec4<f32>(select(0.0, 1.0, vis >= 0.5));
+}
+
+// ---- shadow maps -------------------------------------------------------------------------------
+
+struct ShadowOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) uv0: vec2<f32>,
+    @location(2) uv1: vec2<f32>,
+}
+
+@vertex
+fn shadow_vs(v: VertexIn) -> ShadowOut {
+    var o: ShadowOut;
+    o.clip = shadow_views[pass_u.shadow_view].view_proj * vec4<f32>(v.position, 1.0);
+    o.world = v.position;
+    o.uv0 = v.uv0;
+    o.uv1 = v.uv1;
+    return o;
+}
+
+fn shadow_alpha_test(in: ShadowOut) {
+    if material.alpha_cutoff >= 0.0 {
+        var a = material.base_color.a;
+        if (material.flags & 1u) != 0u {
+            let uv = select(in.uv0, in.uv1, (material.uv_sets & 1u) == 1u);
+            a *= textureSampleLevel(base_tex, tex_sampler, uv, 0.0).a;
+        }
+        if a < material.alpha_cutoff {
+            discard;
+        }
+    }
+}
+
+@fragment
+fn shadow_depth_fs(in: ShadowOut) {
+    shadow_alpha_test(in);
+}
+
+// Heidrich's variant: the linear depth goes to a colour target.
+@fragment
+fn shadow_linear_fs(in: ShadowOut) -> @location(0) vec4<f32> {
+    shadow_alpha_test(in);
+    let sv = shadow_views[pass_u.shadow_view];
+    if sv.ortho == 1u {
+        return vec4<f32>(in.clip.z, 0.0, 0.0, 0.0);
+    }
+    let li = lights[pass_u.light_index];
+    return vec4<f32>(length(in.world - li.position) / sv.far, 0.0, 0.0, 0.0);
+}
+
+// ---- projected planar shadows (Heidrich 1999 §6.1) ---------------------------------------------
+
+// Casters flattened onto the receiver plane by the light's planar projection (a shadow view
+// slot holds the projection matrix); they mark the stencil where the plane is in shadow.
+@vertex
+fn planar_vs(v: VertexIn) -> @builtin(position) vec4<f32> {
+    let flat = shadow_views[pass_u.shadow_view].view_proj * vec4<f32>(v.position, 1.0);
+    return frame.view_proj * flat;
+}
+
+// ---- output ------------------------------------------------------------------------------------
+
+@group(3) @binding(4) var hdr_in: texture_2d<f32>;
+
+// Exposure and Reinhard on luminance-preserving channels: the displayed frame of `bench frame`.
+@fragment
+fn tonemap_fs(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let c = textureLoad(hdr_in, vec2<i32>(in.clip.xy), 0).rgb * frame.exposure;
+    return vec4<f32>(c / (vec3<f32>(1.0) + c), 1.0);
+}
