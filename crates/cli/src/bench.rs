@@ -136,7 +136,6 @@ pub fn run(
     kind: BenchKind,
     scene: &str,
     json: bool,
-    technique: Option<String>,
     n: usize,
     dump_dir: Option<std::path::PathBuf>,
     opaque: bool,
@@ -147,14 +146,7 @@ pub fn run(
                 "bench bake (the light-map bakers are planned)",
             ));
         }
-        BenchKind::Frame => {
-            return Err(not_implemented(format!(
-                "bench frame{} (the GPU renderer is planned)",
-                technique
-                    .map(|t| format!(" --technique {t}"))
-                    .unwrap_or_default()
-            )));
-        }
+        BenchKind::Frame => anyhow::bail!("bench frame is handled by raster_cmd::bench_frame"),
         BenchKind::Trace => {}
     }
     anyhow::ensure!(

@@ -98,6 +98,10 @@ enum Command {
         /// `bench trace`: ignore alpha (treat alpha-tested triangles as opaque).
         #[arg(long)]
         opaque: bool,
+        #[command(flatten)]
+        frame: raster_cmd::FrameBenchArgs,
+        #[command(flatten)]
+        raster: raster_cmd::RasterArgs,
     },
     /// Spherical harmonics of environment maps: coefficients and irradiance maps.
     #[command(subcommand)]
@@ -238,7 +242,16 @@ fn run(cli: Cli) -> Result<()> {
             rays,
             dump,
             opaque,
-        } => bench::run(what, &scene, json, technique, rays, dump, opaque),
+            frame,
+            raster,
+        } => {
+            if matches!(what, bench::BenchKind::Frame) {
+                let t = technique.context("bench frame needs --technique")?;
+                let mut s = load_scene(&scene, false)?;
+                return raster_cmd::bench_frame(&mut s, &t, &raster, &frame, json);
+            }
+            bench::run(what, &scene, json, rays, dump, opaque)
+        }
         Command::Sh(cmd) => sh_cmd::run(cmd),
         Command::View { scene } => {
             load_scene(&scene, false)?;

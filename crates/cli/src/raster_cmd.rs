@@ -167,27 +167,6 @@ pub fn settings(
     })
 }
 
-/// Box-filter an image down by `k` per axis.
-pub fn downsample(img: &Image, k: u32) -> Image {
-    if k == 1 {
-        return img.clone();
-    }
-    let (w, h) = (img.width / k, img.height / k);
-    let mut out = Image::new(w, h);
-    for y in 0..h {
-        for x in 0..w {
-            let mut s = glam::Vec3::ZERO;
-            for dy in 0..k {
-                for dx in 0..k {
-                    s += img.data[((y * k + dy) * img.width + x * k + dx) as usize];
-                }
-            }
-            out.data[(y * w + x) as usize] = s / (k * k) as f32;
-        }
-    }
-    out
-}
-
 /// Render one image with a GPU technique; also returns the frame's timings.
 pub fn render_raster(
     ctx: &GpuContext,
@@ -204,7 +183,7 @@ pub fn render_raster(
     r.render(ctx);
     let times = r.render(ctx);
     let img = r.read_hdr(ctx)?;
-    Ok((downsample(&img, a.ssaa), times))
+    Ok((img.downsample(a.ssaa), times))
 }
 
 /// A GPU context, with the CLI's advice when none exists.
@@ -215,4 +194,123 @@ pub fn context() -> Result<GpuContext> {
         ctx.info.name, ctx.info.backend, ctx.info.driver
     );
     Ok(ctx)
+}
+
+/// Options of `bench frame`.
+#[derive(Args, Clone, Debug)]
+pub struct FrameBenchArgs {
+    #[arg(long, default_value_t = 1920)]
+    pub width: u32,
+    #[arg(long, default_value_t = 1080)]
+    pub height: u32,
+    /// Frames measured (after two warm-up frames); medians are reported.
+    #[arg(long, default_value_t = 30)]
+    pub frames: usize,
+    /// Use exactly this many lights: extra white point lights on a circle (r = 3 m, 3 m high)
+    /// are added, or the scene's list is cut.
+    #[arg(long)]
+    pub lights: Option<usize>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// `lightlab bench frame`: milliseconds per pass of a GPU technique.
+pub fn bench_frame(
+    scene: &mut Scene,
+    technique: &str,
+    a: &RasterArgs,
+    f: &FrameBenchArgs,
+    json: bool,
+) -> Result<()> {
+    anyhow::ensure!(
+        RASTER_TECHNIQUES.contains(&technique),
+        "bench frame needs a GPU technique ({})",
+        RASTER_TECHNIQUES.join(", ")
+    );
+    anyhow::ensure!(
+        (1..=10_000).contains(&f.frames),
+        "--frames must be 1 to 10000"
+    );
+    apply_brdf(scene, a.brdf.as_deref())?;
+    if let Some(n) = f.lights {
+        anyhow::ensure!(n <= 256, "--lights must be at most 256");
+        let extra = n.saturating_sub(scene.lights.len());
+        for i in 0..extra {
+            let phi = i as f32 * 2.399_963; // golden angle
+            scene.lights.push(lightlab_scene::Light {
+                name: format!("bench_{i}"),
+                kind: lightlab_scene::LightKind::Point,
+                color: glam::Vec3::ONE,
+                intensity: 5.0,
+                position: glam::Vec3::new(3.0 * phi.cos(), 3.0, 3.0 * phi.sin()),
+                direction: -glam::Vec3::Y,
+                range: None,
+            });
+        }
+        scene.lights.truncate(n);
+    }
+    let ctx = context()?;
+    let s = settings(technique, a, f.width, f.height, 0)?;
+    let mut r = Renderer::new(&ctx, scene, s)?;
+    r.render(&ctx);
+    r.render(&ctx);
+    let mut per_pass: std::collections::BTreeMap<&'static str, Vec<f64>> = Default::default();
+    let (mut gpu, mut wall, mut cpu) = (vec![], vec![], vec![]);
+    for _ in 0..f.frames {
+        let t = r.render(&ctx);
+        for (k, v) in &t.gpu_ms {
+            per_pass.entry(k).or_default().push(*v);
+        }
+        gpu.push(t.gpu_ms.values().sum());
+        wall.push(t.wall_ms);
+        cpu.push(t.cpu_volumes_ms);
+    }
+    let passes: std::collections::BTreeMap<&str, f64> =
+        per_pass.into_iter().map(|(k, v)| (k, median(v))).collect();
+    let (gpu, wall, cpu) = (median(gpu), median(wall), median(cpu));
+    println!(
+        "{} on {} at {}×{}, {} lights, {} triangles, {} ({:?}); median of {} frames",
+        technique,
+        scene.name,
+        f.width,
+        f.height,
+        r.light_count(),
+        r.scene.triangles,
+        ctx.info.name,
+        ctx.info.backend,
+        f.frames
+    );
+    if passes.is_empty() {
+        println!("(no GPU timestamps on this adapter: wall-clock frame time only)");
+    }
+    for (k, v) in &passes {
+        println!("  {k:<16} {v:>9.3} ms");
+    }
+    if !passes.is_empty() {
+        println!("  {:<16} {gpu:>9.3} ms", "GPU total");
+    }
+    println!("  {:<16} {cpu:>9.3} ms", "CPU volumes");
+    println!(
+        "  {:<16} {wall:>9.3} ms (submit to idle, incl. readback of timings)",
+        "wall"
+    );
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "scene": scene.name, "technique": technique, "width": f.width,
+                "height": f.height, "lights": r.light_count(), "triangles": r.scene.triangles,
+                "adapter": ctx.info.name, "backend": format!("{:?}", ctx.info.backend),
+                "frames": f.frames, "passes_ms": passes, "gpu_ms": gpu,
+                "cpu_volumes_ms": cpu, "wall_ms": wall,
+            })
+        );
+    }
+    Ok(())
 }

@@ -71,6 +71,28 @@ impl Image {
         }
     }
 
+    /// Box-filter down by `k` per axis (supersampling resolve); trailing rows and columns that
+    /// do not fill a k×k block are dropped.
+    pub fn downsample(&self, k: u32) -> Image {
+        if k <= 1 {
+            return self.clone();
+        }
+        let (w, h) = (self.width / k, self.height / k);
+        let mut out = Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let mut s = Vec3::ZERO;
+                for dy in 0..k {
+                    for dx in 0..k {
+                        s += self.data[((y * k + dy) * self.width + x * k + dx) as usize];
+                    }
+                }
+                out.data[(y * w + x) as usize] = s / (k * k) as f32;
+            }
+        }
+        out
+    }
+
     pub fn from_fn(width: u32, height: u32, mut f: impl FnMut(u32, u32) -> Vec3) -> Self {
         let mut img = Image::new(width, height);
         for y in 0..height {

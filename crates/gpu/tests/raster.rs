@@ -1,0 +1,315 @@
+//! Acceptance of the rasterised techniques (issue 4) against the CPU ray caster and the path
+//! tracer's `direct` render. Runs on lavapipe in CI (never skipped there).
+
+use glam::{Vec2, Vec3};
+use lightlab_core::image::Image;
+use lightlab_gpu::lights::Attenuation;
+use lightlab_gpu::raster::{Ambient, RasterSettings, RenderPath, Renderer, ShadowMethod};
+use lightlab_gpu::{GpuContext, test_context};
+use lightlab_scene::{BrdfModel, Camera, LightKind, Scene, builtin};
+use lightlab_trace::{Accel, PathTracer, RenderSettings};
+
+const N: u32 = 256;
+
+/// CPU ray-cast visibility of each light at each pixel centre: Some(visible) where the
+/// comparison is meaningful (a surface facing the light, away from shadow and geometry edges).
+fn cpu_visibility(scene: &Scene, camera: usize) -> Vec<Vec<Option<bool>>> {
+    let accel = Accel::new(scene);
+    let cam = &scene.cameras[camera];
+    let origin = cam.position();
+    let mut hits = vec![];
+    for y in 0..N {
+        for x in 0..N {
+            let ndc = Vec2::new(
+                (x as f32 + 0.5) / N as f32 * 2.0 - 1.0,
+                1.0 - (y as f32 + 0.5) / N as f32 * 2.0,
+            );
+            let dir = cam.ray_direction(ndc, 1.0);
+            hits.push(accel.intersect(origin, dir, f32::INFINITY).map(|h| {
+                let [a, b, c] = accel.world_triangle(h.slot);
+                let mut ng = (b - a).cross(c - a).normalize();
+                if ng.dot(dir) > 0.0 {
+                    ng = -ng;
+                }
+                (origin + dir * h.t, ng, h.prim.instance)
+            }));
+        }
+    }
+    scene
+        .lights
+        .iter()
+        .map(|light| {
+            let raw: Vec<Option<bool>> = hits
+                .iter()
+                .map(|h| {
+                    let (p, ng, _) = (*h)?;
+                    let (l, dist) = match light.kind {
+                        LightKind::Directional { .. } => (-light.direction, f32::INFINITY),
+                        _ => {
+                            let d = light.position - p;
+                            (d.normalize(), d.length())
+                        }
+                    };
+                    if ng.dot(l) < 0.05 {
+                        return None;
+                    }
+                    let o = p + ng * 2e-4 * (1.0 + p.abs().max_element());
+                    Some(!accel.occluded(o, l, dist * (1.0 - 1e-4)))
+                })
+                .collect();
+            // Keep only pixels whose 3×3 neighbourhood agrees (same object, same visibility).
+            (0..(N * N) as usize)
+                .map(|i| {
+                    let (x, y) = ((i as u32 % N) as i32, (i as u32 / N) as i32);
+                    let v = raw[i]?;
+                    let inst = hits[i]?.2;
+                    for dy in -1..=1 {
+                        for dx in -1..=1 {
+                            let (nx, ny) = (x + dx, y + dy);
+                            if nx < 0 || ny < 0 || nx >= N as i32 || ny >= N as i32 {
+                                continue;
+                            }
+                            let j = (ny as u32 * N + nx as u32) as usize;
+                            if raw[j] != Some(v) || hits[j].map(|h| h.2) != Some(inst) {
+                                return None;
+                            }
+                        }
+                    }
+                    Some(v)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Fraction of compared pixels where the GPU mask agrees, over all lights; and the count.
+fn agreement(masks: &[Vec<u8>], cpu: &[Vec<Option<bool>>]) -> (f64, usize) {
+    let (mut same, mut total) = (0usize, 0usize);
+    for (m, c) in masks.iter().zip(cpu) {
+        for (g, c) in m.iter().zip(c) {
+            if let Some(v) = c {
+                total += 1;
+                same += ((*g > 127) == *v) as usize;
+            }
+        }
+    }
+    (same as f64 / total.max(1) as f64, total)
+}
+
+fn masks(ctx: &GpuContext, scene: &Scene, camera: usize, shadows: ShadowMethod) -> Vec<Vec<u8>> {
+    let mut r = Renderer::new(
+        ctx,
+        scene,
+        RasterSettings {
+            width: N,
+            height: N,
+            camera,
+            shadows,
+            attenuation: Attenuation::InverseSquare,
+            ..Default::default()
+        },
+    )
+    .expect("renderer");
+    r.shadow_masks(ctx).expect("masks")
+}
+
+/// The `shadows` scene with an extra camera inside the shadow volume of a pillar.
+fn shadows_scene() -> (Scene, usize) {
+    let mut s = builtin::builtin("shadows").unwrap();
+    let light = s.lights[0].position;
+    let pillar = Vec3::new(-2.5, 1.2, -2.5);
+    let eye = pillar + (pillar - light).normalize() * 0.7;
+    s.cameras.push(Camera::look_at(
+        "inside",
+        eye,
+        Vec3::new(0.5, 0.4, 0.5),
+        Vec3::Y,
+        60f32.to_radians(),
+    ));
+    let n = s.cameras.len() - 1;
+    (s, n)
+}
+
+#[test]
+fn shadow_volumes_match_ray_cast_visibility() {
+    let Some(ctx) = test_context() else {
+        return;
+    };
+    let (scene, inside) = shadows_scene();
+    let cpu = cpu_visibility(&scene, 0);
+    let zfail = masks(&ctx, &scene, 0, ShadowMethod::VolumesZFail);
+    let zpass = masks(&ctx, &scene, 0, ShadowMethod::VolumesZPass);
+    let (a, n) = agreement(&zfail, &cpu);
+    eprintln!(
+        "z-fail vs ray casts (default camera): {:.5} of {n} pixels",
+        a
+    );
+    assert!(n > 5 * 20_000, "too few pixels compared: {n}");
+    assert!(a >= 0.999, "z-fail agreement {a}");
+    let same = zfail
+        .iter()
+        .zip(&zpass)
+        .map(|(a, b)| a.iter().zip(b).filter(|(x, y)| x == y).count())
+        .sum::<usize>() as f64
+        / (zfail.len() * (N * N) as usize) as f64;
+    eprintln!("z-pass = z-fail on {same:.6} of all pixels (camera outside the volumes)");
+    assert!(same >= 0.999, "z-pass vs z-fail {same}");
+
+    // The camera inside a volume: z-fail stays right, z-pass breaks.
+    assert!(
+        {
+            let accel = Accel::new(&scene);
+            let eye = scene.cameras[inside].position();
+            let l = scene.lights[0].position;
+            accel.occluded(eye, (l - eye).normalize(), (l - eye).length())
+        },
+        "the test camera is not in the pillar's shadow"
+    );
+    let cpu = cpu_visibility(&scene, inside);
+    let zfail = masks(&ctx, &scene, inside, ShadowMethod::VolumesZFail);
+    let zpass = masks(&ctx, &scene, inside, ShadowMethod::VolumesZPass);
+    let (a, n) = agreement(&zfail, &cpu);
+    let (b, _) = agreement(&zpass, &cpu);
+    eprintln!("camera inside a volume: z-fail {a:.5}, z-pass {b:.5} of {n} pixels");
+    assert!(n > 2_000, "too few pixels compared: {n}");
+    assert!(a >= 0.999, "z-fail agreement with the camera inside: {a}");
+    assert!(
+        b < 0.99,
+        "z-pass should fail with the camera inside a volume: {b}"
+    );
+}
+
+#[test]
+fn shadow_maps_match_ray_cast_visibility() {
+    let Some(ctx) = test_context() else {
+        return;
+    };
+    let (scene, _) = shadows_scene();
+    let cpu = cpu_visibility(&scene, 0);
+    for method in [ShadowMethod::Map, ShadowMethod::MapLinear] {
+        let m = masks(&ctx, &scene, 0, method);
+        let (a, n) = agreement(&m, &cpu);
+        eprintln!("{method:?} vs ray casts: {a:.5} of {n} pixels");
+        assert!(a >= 0.99, "{method:?} agreement {a}");
+    }
+}
+
+#[test]
+fn directional_cascades_match_ray_cast_visibility() {
+    let Some(ctx) = test_context() else {
+        return;
+    };
+    // `room` is lit by the sun through a window: cascades, and volumes of a directional light.
+    let scene = builtin::builtin("room").unwrap();
+    let cpu = cpu_visibility(&scene, 0);
+    for method in [ShadowMethod::Map, ShadowMethod::VolumesZFail] {
+        let m = masks(&ctx, &scene, 0, method);
+        let (a, n) = agreement(&m, &cpu);
+        eprintln!("room sun, {method:?}: {a:.5} of {n} pixels");
+        assert!(n > 10_000, "too few pixels compared: {n}");
+        assert!(a >= 0.99, "{method:?} agreement {a}");
+    }
+}
+
+/// Lambert floor, Blinn-Phong stone and paint: the GPU's forward and deferred renders with
+/// shadow volumes against the path tracer's `direct` render of the same models.
+#[test]
+fn phong_with_shadow_volumes_matches_the_direct_reference() {
+    let Some(ctx) = test_context() else {
+        return;
+    };
+    let mut scene = builtin::builtin("shadows").unwrap();
+    for m in &mut scene.materials {
+        m.brdf = if m.name == "floor" {
+            BrdfModel::Lambert
+        } else {
+            BrdfModel::BlinnPhong
+        };
+    }
+    let accel = Accel::new(&scene);
+    let reference = PathTracer::new(&scene, &accel)
+        .render(
+            &RenderSettings {
+                width: N,
+                height: N,
+                spp: 16,
+                max_depth: 1,
+                min_depth: 0,
+                seed: 3,
+                camera: 0,
+            },
+            &|_, _| true,
+        )
+        .unwrap();
+    let ssaa = 4;
+    for path in [RenderPath::Forward, RenderPath::Deferred] {
+        let mut r = Renderer::new(
+            &ctx,
+            &scene,
+            RasterSettings {
+                width: N * ssaa,
+                height: N * ssaa,
+                path,
+                shadows: ShadowMethod::VolumesZFail,
+                attenuation: Attenuation::InverseSquare,
+                ambient: Ambient::None,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        r.render(&ctx);
+        let img: Image = r.read_hdr(&ctx).unwrap().downsample(ssaa);
+        let e = lightlab_core::metrics::relmse(&img, &reference).unwrap();
+        let mean = |i: &Image| i.data.iter().map(|c| c.x + c.y + c.z).sum::<f32>();
+        eprintln!(
+            "{path:?} vs CPU direct: relMSE {e:.5}, mean ratio {:.4}",
+            mean(&img) / mean(&reference)
+        );
+        assert!(e <= 0.01, "{path:?}: relMSE {e}");
+    }
+}
+
+/// Fuchs's attenuation functions reach zero at the radius: no light beyond r.
+#[test]
+fn fuchs_attenuation_cuts_off_at_the_radius() {
+    let Some(ctx) = test_context() else {
+        return;
+    };
+    let mut scene = builtin::builtin("shadows").unwrap();
+    scene.lights.truncate(1);
+    let render = |atten, radius| {
+        let mut r = Renderer::new(
+            &ctx,
+            &scene,
+            RasterSettings {
+                width: 64,
+                height: 64,
+                shadows: ShadowMethod::None,
+                attenuation: atten,
+                light_radius: Some(radius),
+                ambient: Ambient::None,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        r.render(&ctx);
+        r.read_hdr(&ctx).unwrap()
+    };
+    // Nothing lies within 1.5 m of the light (the nearest pillar top is 1.9 m away).
+    for a in [
+        Attenuation::Fuchs2,
+        Attenuation::Fuchs3,
+        Attenuation::Fuchs4,
+    ] {
+        let dark = render(a, 1.5);
+        let lit = render(a, 8.0);
+        let sum = |i: &Image| i.data.iter().map(|c| c.x + c.y + c.z).sum::<f32>();
+        assert!(
+            sum(&dark) < 1e-3 * sum(&lit),
+            "{a:?}: {} vs {}",
+            sum(&dark),
+            sum(&lit)
+        );
+        assert!(sum(&lit) > 0.0);
+    }
+}
