@@ -52,6 +52,8 @@ struct Row {
     triangles: usize,
     /// Error against the scene's `reference` image (None for the reference itself).
     error: Option<lightlab_core::metrics::Comparison>,
+    /// GPU techniques: the frame time (GPU timestamps, else wall clock) and what it was on.
+    frame: Option<(f64, String)>,
 }
 
 pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
@@ -69,6 +71,15 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
     };
     let start = Instant::now();
     let mut rows = vec![];
+    // The GPU techniques need an adapter (lavapipe will do); without one they are left out of
+    // the report with a note rather than failing the whole demo.
+    let gpu = match crate::raster_cmd::context() {
+        Ok(c) => Some(c),
+        Err(e) => {
+            eprintln!("GPU techniques skipped: {e:#}");
+            None
+        }
+    };
     for name in names {
         let scene = lightlab_scene::builtin::builtin(name).expect("built-in");
         let mut reference: Option<lightlab_core::image::Image> = None;
@@ -107,7 +118,66 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 seconds,
                 triangles: scene.triangle_count(),
                 error,
+                frame: None,
             });
+        }
+        if let Some(ctx) = &gpu {
+            let settings = settings_for(name, quality);
+            // Same light model as the reference (physical fall-off), 2×2 supersampled.
+            let args = crate::raster_cmd::RasterArgs {
+                attenuation: "inverse-square".into(),
+                ssaa: 2,
+                ..Default::default()
+            };
+            for technique in crate::raster_cmd::RASTER_TECHNIQUES {
+                let t = Instant::now();
+                let (img, times) = crate::raster_cmd::render_raster(
+                    ctx,
+                    &scene,
+                    technique,
+                    &args,
+                    settings.width,
+                    settings.height,
+                    0,
+                )?;
+                let seconds = t.elapsed().as_secs_f64();
+                let frame_ms = if times.gpu_ms.is_empty() {
+                    times.wall_ms
+                } else {
+                    times.gpu_ms.values().sum()
+                };
+                let file = format!("{name}-{technique}");
+                img.write(&out.join(format!("{file}.exr")), LdrSettings::default())?;
+                img.write(&out.join(format!("{file}.png")), LdrSettings::default())?;
+                eprintln!(
+                    "{name:<8} {technique:<20} {:>4}×{:<4} frame {frame_ms:>8.2} ms",
+                    settings.width, settings.height
+                );
+                let error = match &reference {
+                    Some(r) => Some(lightlab_core::metrics::compare(
+                        &img,
+                        r,
+                        LdrSettings::default(),
+                    )?),
+                    None => None,
+                };
+                rows.push(Row {
+                    scene: name.into(),
+                    technique: technique.into(),
+                    file,
+                    settings: RenderSettings {
+                        spp: 0,
+                        ..settings.clone()
+                    },
+                    seconds,
+                    triangles: scene.triangle_count(),
+                    error,
+                    frame: Some((
+                        frame_ms,
+                        format!("{} ({:?})", ctx.info.name, ctx.info.backend),
+                    )),
+                });
+            }
         }
     }
     let total = start.elapsed().as_secs_f64();
@@ -130,7 +200,10 @@ fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
     h.push_str(&format!(
         "<p>lightlab {} · quality <b>{:?}</b> · {} threads · total {:.1} s. Technique <code>reference</code> is the \
          path-traced ground truth (unidirectional, NEE + MIS, Russian roulette), <code>direct</code> its direct-light-only \
-         variant. Images are linear EXR beside each PNG (filmic tone curve, exposure 1).</p>",
+         variant. <code>phong</code>, <code>phong-shadow-volumes</code> and <code>phong-shadow-maps</code> are the GPU \
+         rasterisers (Fuchs 2005 §4; forward path, 2×2 supersampling, physical inverse-square fall-off so that they \
+         compare with the reference; the ambient term is the environment's unshadowed SH irradiance; no indirect light, \
+         area lights only as emissive surfaces). Images are linear EXR beside each PNG (filmic tone curve, exposure 1).</p>",
         env!("CARGO_PKG_VERSION"),
         quality,
         rayon::current_num_threads(),
@@ -147,6 +220,17 @@ fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
                 r.triangles
             ));
         }
+        if let Some((ms, adapter)) = &r.frame {
+            h.push_str(&format!(
+                "<figure><img src=\"{f}.png\" width=\"{w}\"><figcaption><b>{t}</b> · {w}×{hh} · frame {ms:.2} ms on \
+                 {adapter} · <a href=\"{f}.exr\">EXR</a></figcaption></figure>",
+                f = r.file,
+                w = r.settings.width,
+                hh = r.settings.height,
+                t = r.technique,
+            ));
+            continue;
+        }
         h.push_str(&format!(
             "<figure><img src=\"{f}.png\" width=\"{w}\"><figcaption><b>{t}</b> · {w}×{hh} · {spp} spp · max depth {d} · \
              seed {seed} · {s:.1} s · <a href=\"{f}.exr\">EXR</a></figcaption></figure>",
@@ -161,22 +245,33 @@ fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
         ));
     }
     h.push_str("<h2>Errors against the reference and timings</h2><table><tr><th>scene</th><th>technique</th><th>size</th><th>spp</th>\
-        <th>RMSE</th><th>relMSE</th><th>FLIP</th><th>seconds</th><th>Msamples/s</th></tr>");
+        <th>RMSE</th><th>relMSE</th><th>FLIP</th><th>seconds</th><th>Msamples/s</th><th>frame ms</th></tr>");
     for r in rows {
         let samples = r.settings.width as f64 * r.settings.height as f64 * r.settings.spp as f64;
         h.push_str(&format!(
-            "<tr><td>{}</td><td>{}</td><td>{}×{}</td><td>{}</td>{}<td>{:.2}</td><td>{:.2}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}×{}</td><td>{}</td>{}<td>{:.2}</td><td>{}</td><td>{}</td></tr>",
             r.scene,
             r.technique,
             r.settings.width,
             r.settings.height,
-            r.settings.spp,
+            if r.frame.is_some() {
+                "—".to_string()
+            } else {
+                r.settings.spp.to_string()
+            },
             match &r.error {
                 Some(e) => format!("<td>{:.5}</td><td>{:.5}</td><td>{:.4}</td>", e.rmse, e.relmse, e.flip),
                 None => "<td colspan=\"3\">(ground truth)</td>".into(),
             },
             r.seconds,
-            samples / r.seconds / 1e6
+            match &r.frame {
+                Some(_) => "—".to_string(),
+                None => format!("{:.2}", samples / r.seconds / 1e6),
+            },
+            match &r.frame {
+                Some((ms, _)) => format!("{ms:.2}"),
+                None => "—".to_string(),
+            },
         ));
     }
     h.push_str("</table></body></html>\n");

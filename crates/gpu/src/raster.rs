@@ -40,12 +40,34 @@ const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
 const SHADOW_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const MASK: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
-const GBUFFER: [wgpu::TextureFormat; 4] = [
-    wgpu::TextureFormat::Rgba16Float,
-    wgpu::TextureFormat::Rgba16Float,
-    wgpu::TextureFormat::Rgba16Float,
-    wgpu::TextureFormat::Rgba32Float,
-];
+/// G-buffer formats: diffuse + dielectric F0, normal + roughness, F0 + model, and the
+/// camera-relative position (32-bit float where renderable, else 16-bit: GLES).
+fn gbuffer_formats(ctx: &GpuContext) -> [wgpu::TextureFormat; 4] {
+    let f16 = wgpu::TextureFormat::Rgba16Float;
+    [
+        f16,
+        f16,
+        f16,
+        renderable_or(ctx, wgpu::TextureFormat::Rgba32Float, f16),
+    ]
+}
+
+/// `want` if the adapter can render to it, else `fallback`.
+fn renderable_or(
+    ctx: &GpuContext,
+    want: wgpu::TextureFormat,
+    fallback: wgpu::TextureFormat,
+) -> wgpu::TextureFormat {
+    let f = ctx.adapter.get_texture_format_features(want);
+    if f.allowed_usages
+        .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+    {
+        want
+    } else {
+        fallback
+    }
+}
+
 const SLOT: u64 = 256;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -590,11 +612,19 @@ impl Renderer {
             label: Some("raster"),
             source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.as_str().into()),
         });
+        let gb_formats = gbuffer_formats(ctx);
+        let linear_format = renderable_or(
+            ctx,
+            wgpu::TextureFormat::R32Float,
+            wgpu::TextureFormat::R16Float,
+        );
         let pipelines = Pipelines::new(
             device,
             &module,
             s,
             [&pl_scene, &pl_deferred, &pl_shadow, &pl_frame, &pl_tonemap],
+            gb_formats,
+            linear_format,
         );
 
         // Targets.
@@ -610,7 +640,7 @@ impl Renderer {
             rt | sampled | wgpu::TextureUsages::COPY_SRC,
         );
         let depth = texture(device, "depth", s.width, s.height, 1, DEPTH, rt);
-        let gbuffer: Vec<wgpu::TextureView> = GBUFFER
+        let gbuffer: Vec<wgpu::TextureView> = gb_formats
             .iter()
             .map(|f| {
                 texture(device, "g-buffer", s.width, s.height, 1, *f, rt | sampled)
@@ -666,7 +696,7 @@ impl Renderer {
             ss,
             ss,
             linear_layers,
-            wgpu::TextureFormat::R32Float,
+            linear_format,
             rt | sampled,
         );
         let sld = texture(device, "linear z", ss, ss, 1, SHADOW_DEPTH, rt);
@@ -1347,6 +1377,8 @@ impl Pipelines {
         module: &wgpu::ShaderModule,
         s: &RasterSettings,
         layouts: [&wgpu::PipelineLayout; 5],
+        gb_formats: [wgpu::TextureFormat; 4],
+        linear_format: wgpu::TextureFormat,
     ) -> Pipelines {
         use wgpu::CompareFunction as C;
         use wgpu::StencilOperation as Op;
@@ -1390,7 +1422,7 @@ impl Pipelines {
         let cull = |double_sided: bool| (!double_sided).then_some(wgpu::Face::Back);
         let both = |f: &dyn Fn(bool) -> wgpu::RenderPipeline| [f(false), f(true)];
         let gb_targets: Vec<Option<wgpu::ColorTargetState>> = std::iter::once(hdr(None))
-            .chain(GBUFFER.iter().map(|f| {
+            .chain(gb_formats.iter().map(|f| {
                 Some(wgpu::ColorTargetState {
                     format: *f,
                     blend: None,
@@ -1575,7 +1607,7 @@ impl Pipelines {
                 buffers: &vl,
                 fs: Some("shadow_linear_fs"),
                 targets: &[Some(wgpu::ColorTargetState {
-                    format: wgpu::TextureFormat::R32Float,
+                    format: linear_format,
                     blend: None,
                     write_mask: wgpu::ColorWrites::ALL,
                 })],

@@ -264,7 +264,8 @@ fn gbuffer_fs(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     o.diffuse = vec4<f32>(s.diffuse, s.f0d);
     o.normal = vec4<f32>(s.n, s.roughness);
     o.specular = vec4<f32>(s.f0, f32(s.model) + min(s.transmission, 0.99));
-    o.position = vec4<f32>(s.p, 1.0);
+    // Camera-relative: keeps precision near the viewer when the target is 16-bit (GLES).
+    o.position = vec4<f32>(s.p - frame.camera_pos, 1.0);
     // The geometric normal is not stored: the deferred path uses the shading normal for the
     // horizon test (documented deviation; the forward path is the exact one).
     return o;
@@ -287,7 +288,7 @@ fn gbuffer_surface(c: vec2<i32>) -> Surface {
     let d = textureLoad(gb_diffuse, c, 0);
     let n = textureLoad(gb_normal, c, 0);
     let sp = textureLoad(gb_specular, c, 0);
-    s.p = textureLoad(gb_position, c, 0).xyz;
+    s.p = textureLoad(gb_position, c, 0).xyz + frame.camera_pos;
     s.n = normalize(n.xyz);
     s.ng = s.n;
     s.diffuse = d.rgb;
