@@ -214,14 +214,6 @@ fn compare_rejects_different_sizes_and_unreadable_files() {
 fn unbuilt_methods_exit_with_code_2() {
     for args in [
         vec!["bake", "--scene", "cornell", "--method", "radiosity"],
-        vec![
-            "bench",
-            "frame",
-            "--scene",
-            "shadows",
-            "--technique",
-            "phong",
-        ],
         vec!["bench", "bake", "--scene", "cornell"],
         vec!["view", "--scene", "cornell"],
     ] {
@@ -267,6 +259,12 @@ fn demo_preview_writes_a_report_with_every_scene() {
     }
     // `direct` is measured against the reference: three figures per row.
     assert!(html.contains("relMSE") && html.contains("(ground truth)"));
+    if lightlab_gpu::test_context().is_some() {
+        for t in ["phong", "phong-shadow-volumes", "phong-shadow-maps"] {
+            assert!(html.contains(&format!("shadows-{t}.png")), "{t}");
+        }
+        assert!(html.contains("frame ms"));
+    }
 }
 
 #[test]
@@ -330,4 +328,99 @@ fn sh_project_and_irradiance() {
     let bad = lightlab(&["sh", "project", "--env", odd.to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(1));
     assert!(stderr(&bad).contains("--format"), "{}", stderr(&bad));
+}
+
+/// The GPU techniques through the command line (lavapipe in CI; skipped locally without an
+/// adapter, like every GPU test).
+#[test]
+fn gpu_techniques_render_and_bench() {
+    if lightlab_gpu::test_context().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for (t, variant) in [
+        ("phong", None),
+        ("phong-shadow-volumes", Some("zpass")),
+        ("phong-shadow-maps", Some("linear")),
+        ("phong-shadow-maps", Some("planar")),
+    ] {
+        let out = dir.path().join(format!("{t}.png"));
+        let mut args = vec![
+            "render",
+            "--scene",
+            "shadows",
+            "--technique",
+            t,
+            "--width",
+            "64",
+            "--json",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        if let Some(v) = variant {
+            args.extend(["--shadow-variant", v, "--path", "deferred"]);
+        }
+        let o = lightlab(&args);
+        assert!(o.status.success(), "{t}: {}", stderr(&o));
+        assert!(out.exists());
+        let v: serde_json::Value =
+            serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
+        assert!(v["frame_wall_ms"].as_f64().unwrap() > 0.0);
+    }
+    let o = lightlab(&[
+        "bench",
+        "frame",
+        "--scene",
+        "shadows",
+        "--technique",
+        "phong-shadow-volumes",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--frames",
+        "2",
+        "--lights",
+        "8",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
+    assert_eq!(v["lights"].as_u64(), Some(8));
+    assert!(v["wall_ms"].as_f64().unwrap() > 0.0);
+    // A variant of another technique, and bad option values, are clear errors.
+    let out = dir.path().join("bad.png");
+    for (args, needle) in [
+        (
+            vec!["--technique", "phong", "--shadow-variant", "zfail"],
+            "does not apply",
+        ),
+        (
+            vec!["--technique", "phong", "--attenuation", "cubic"],
+            "unknown --attenuation",
+        ),
+        (
+            vec!["--technique", "phong", "--brdf", "velvet"],
+            "unknown --brdf",
+        ),
+        (
+            vec!["--technique", "phong", "--ambient", "1,2"],
+            "--ambient",
+        ),
+    ] {
+        let mut a = vec![
+            "render",
+            "--scene",
+            "shadows",
+            "--width",
+            "32",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        a.extend(args);
+        let o = lightlab(&a);
+        assert_eq!(o.status.code(), Some(1), "{a:?}");
+        assert!(stderr(&o).contains(needle), "{}", stderr(&o));
+        assert!(!out.exists());
+    }
 }
