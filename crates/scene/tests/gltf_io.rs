@@ -1,7 +1,7 @@
 //! glTF round trips of every built-in scene, and the bad-input cases of the loader.
 
 use glam::{Vec3, Vec4};
-use lightlab_scene::{LoadOptions, Scene, SceneError, builtin, gltf_io, load};
+use lightlab_scene::{BrdfModel, LoadOptions, Scene, SceneError, builtin, gltf_io, load};
 use std::path::Path;
 
 fn world_triangles(s: &Scene) -> Vec<[Vec3; 3]> {
@@ -38,6 +38,7 @@ fn assert_same_scene(a: &Scene, b: &Scene) {
         assert_eq!(x.alpha_mode, y.alpha_mode);
         assert_eq!(x.double_sided, y.double_sided);
         assert_eq!(x.transmission, y.transmission);
+        assert_eq!(x.brdf, y.brdf);
         assert_eq!(x.base_color_texture, y.base_color_texture);
     }
     assert_eq!(a.textures.len(), b.textures.len());
@@ -87,6 +88,17 @@ fn every_builtin_scene_round_trips_through_glb_and_gltf() {
             assert_same_scene(&s, &back);
         }
     }
+    // The reflection model travels in extras.lightlab.brdf.
+    let mut s = builtin::builtin("shadows").unwrap();
+    let models = [BrdfModel::Lambert, BrdfModel::Phong, BrdfModel::BlinnPhong];
+    for (m, b) in s.materials.iter_mut().zip(models) {
+        m.brdf = b;
+    }
+    let p = dir.path().join("brdf.gltf");
+    gltf_io::export(&s, &p).unwrap();
+    let back = gltf_io::import(&p, LoadOptions::default()).unwrap();
+    let got: Vec<BrdfModel> = back.materials.iter().map(|m| m.brdf).collect();
+    assert_eq!(got, models);
     // No temporary files are left behind.
     for e in std::fs::read_dir(dir.path()).unwrap() {
         let n = e.unwrap().file_name().into_string().unwrap();
