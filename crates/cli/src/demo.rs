@@ -92,21 +92,11 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
             let img = render_reference(&scene, technique, &settings)?;
             let seconds = t.elapsed().as_secs_f64();
             let file = format!("{name}-{technique}");
-            img.write(&out.join(format!("{file}.exr")), LdrSettings::default())?;
-            img.write(&out.join(format!("{file}.png")), LdrSettings::default())?;
+            let error = save_and_compare(out, &file, &img, reference.as_ref())?;
             eprintln!(
                 "{name:<8} {technique:<10} {:>4}×{:<4} {:>5} spp {seconds:>7.1} s",
                 settings.width, settings.height, settings.spp
             );
-            // Every technique is measured against the same scene's reference image.
-            let error = match &reference {
-                Some(r) => Some(lightlab_core::metrics::compare(
-                    &img,
-                    r,
-                    LdrSettings::default(),
-                )?),
-                None => None,
-            };
             if technique == "reference" {
                 reference = Some(img);
             }
@@ -147,20 +137,11 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                     times.gpu_ms.values().sum()
                 };
                 let file = format!("{name}-{technique}");
-                img.write(&out.join(format!("{file}.exr")), LdrSettings::default())?;
-                img.write(&out.join(format!("{file}.png")), LdrSettings::default())?;
+                let error = save_and_compare(out, &file, &img, reference.as_ref())?;
                 eprintln!(
                     "{name:<8} {technique:<20} {:>4}×{:<4} frame {frame_ms:>8.2} ms",
                     settings.width, settings.height
                 );
-                let error = match &reference {
-                    Some(r) => Some(lightlab_core::metrics::compare(
-                        &img,
-                        r,
-                        LdrSettings::default(),
-                    )?),
-                    None => None,
-                };
                 rows.push(Row {
                     scene: name.into(),
                     technique: technique.into(),
@@ -188,6 +169,26 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
     })?;
     println!("report: {}", report.display());
     Ok(())
+}
+
+/// Write `DIR/FILE.exr` and `.png`, and measure the image against the scene's reference (every
+/// technique is measured against the same scene's reference image; None for the reference).
+fn save_and_compare(
+    out: &Path,
+    file: &str,
+    img: &lightlab_core::image::Image,
+    reference: Option<&lightlab_core::image::Image>,
+) -> Result<Option<lightlab_core::metrics::Comparison>> {
+    img.write(&out.join(format!("{file}.exr")), LdrSettings::default())?;
+    img.write(&out.join(format!("{file}.png")), LdrSettings::default())?;
+    Ok(match reference {
+        Some(r) => Some(lightlab_core::metrics::compare(
+            img,
+            r,
+            LdrSettings::default(),
+        )?),
+        None => None,
+    })
 }
 
 fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {

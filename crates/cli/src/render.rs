@@ -147,14 +147,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let img = render_reference(&scene, &a.technique, &settings)?;
     let secs = t0.elapsed().as_secs_f64();
-    img.write(
-        &a.output,
-        LdrSettings {
-            exposure: a.exposure,
-            tone: a.tonemap.into(),
-        },
-    )
-    .with_context(|| format!("writing {}", a.output.display()))?;
+    write_output(&a, &img)?;
     let paths = settings.width as f64 * settings.height as f64 * settings.spp as f64;
     eprintln!(
         "wrote {} ({}×{}, {} spp, {:.2} s, {:.2} Msamples/s)",
@@ -185,14 +178,7 @@ fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
     let (img, times) =
         crate::raster_cmd::render_raster(&ctx, scene, &a.technique, &a.raster, w, h, a.camera)?;
     let secs = t0.elapsed().as_secs_f64();
-    img.write(
-        &a.output,
-        LdrSettings {
-            exposure: a.exposure,
-            tone: a.tonemap.into(),
-        },
-    )
-    .with_context(|| format!("writing {}", a.output.display()))?;
+    write_output(a, &img)?;
     let gpu: f64 = times.gpu_ms.values().sum();
     eprintln!(
         "wrote {} ({w}×{h}, {}, frame {:.2} ms wall{}, {:.2} s in all)",
@@ -216,4 +202,16 @@ fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Write the rendered image to `--output` with the PNG tone settings.
+fn write_output(a: &RenderArgs, img: &Image) -> Result<()> {
+    img.write(
+        &a.output,
+        LdrSettings {
+            exposure: a.exposure,
+            tone: a.tonemap.into(),
+        },
+    )
+    .with_context(|| format!("writing {}", a.output.display()))
 }

@@ -86,9 +86,8 @@ pub fn light_radius(light: &Light, atten: Attenuation, radius: Option<f32>) -> O
     }
 }
 
-/// A light as the shaders see it (shadow fields left empty).
-pub fn gpu_light(light: &Light, atten: Attenuation, radius: Option<f32>) -> GpuLight {
-    let r = light_radius(light, atten, radius);
+/// A light as the shaders see it (shadow fields left empty); `r` is its [`light_radius`].
+pub fn gpu_light(light: &Light, atten: Attenuation, r: Option<f32>) -> GpuLight {
     let (kind, cos_inner, cos_outer) = match light.kind {
         LightKind::Point => (0, 1.0, 1.0),
         LightKind::Spot {
@@ -137,22 +136,27 @@ fn any_up(dir: Vec3) -> Vec3 {
     if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y }
 }
 
+/// The eight corners of the box `(lo, hi)`.
+pub fn box_corners((lo, hi): (Vec3, Vec3)) -> [Vec3; 8] {
+    std::array::from_fn(|i| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
 /// Near plane of perspective shadow views.
 pub const SHADOW_NEAR: f32 = 0.05;
 
 /// Far distance of a point or spot light's shadow views: its radius, or the farthest corner of
 /// the scene bounds.
 pub fn shadow_far(light: &Light, radius: Option<f32>, bounds: (Vec3, Vec3)) -> f32 {
-    let (lo, hi) = bounds;
-    let mut far = 0.0f32;
-    for i in 0..8 {
-        let c = Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        );
-        far = far.max((c - light.position).length());
-    }
+    let far = box_corners(bounds)
+        .iter()
+        .map(|c| (*c - light.position).length())
+        .fold(0.0f32, f32::max);
     let far = far * 1.01 + SHADOW_NEAR;
     radius.map_or(far, |r| r.min(far)).max(SHADOW_NEAR * 2.0)
 }
@@ -217,15 +221,9 @@ pub fn cascade_views(
 ) -> Vec<ShadowProjection> {
     let dir = direction.normalize();
     let light_view = look_to_mat4(Vec3::ZERO, dir, any_up(dir));
-    let (lo, hi) = bounds;
     let mut zmin = f32::INFINITY;
     let mut zmax = f32::NEG_INFINITY;
-    for i in 0..8 {
-        let c = Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        );
+    for c in box_corners(bounds) {
         let z = light_view.transform_point3(c).z;
         zmin = zmin.min(z);
         zmax = zmax.max(z);

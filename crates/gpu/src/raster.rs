@@ -19,6 +19,7 @@ use crate::lights::{self, Attenuation, ShadowProjection};
 use crate::shadow_volume::{LightPos, build_volume};
 use crate::uniforms::*;
 use crate::{GpuContext, GpuError};
+use bytemuck::Zeroable;
 use glam::camera::rh::proj::directx;
 use glam::{Mat4, Vec3, Vec4};
 use lightlab_core::image::Image;
@@ -392,8 +393,8 @@ impl Renderer {
             None
         };
         for (li, l) in scene.lights.iter().enumerate() {
-            let mut g = lights::gpu_light(l, s.attenuation, s.light_radius);
             let radius = lights::light_radius(l, s.attenuation, s.light_radius);
+            let mut g = lights::gpu_light(l, s.attenuation, radius);
             let first = views.len();
             if s.shadows.map() {
                 match l.kind {
@@ -406,16 +407,9 @@ impl Renderer {
                         views.extend(lights::point_views(l, far, s.shadow_size));
                     }
                     LightKind::Directional { .. } => {
-                        let (lo, hi) = gscene.bounds;
-                        let far_cam = (0..8)
-                            .map(|i| {
-                                let c = Vec3::new(
-                                    if i & 1 == 0 { lo.x } else { hi.x },
-                                    if i & 2 == 0 { lo.y } else { hi.y },
-                                    if i & 4 == 0 { lo.z } else { hi.z },
-                                );
-                                (c - camera.position()).length()
-                            })
+                        let far_cam = lights::box_corners(gscene.bounds)
+                            .iter()
+                            .map(|c| (*c - camera.position()).length())
                             .fold(1.0f32, f32::max);
                         let near = camera.znear.max(0.05);
                         let ends = lights::cascade_ends(near, far_cam, s.cascades, 0.7);
@@ -455,7 +449,7 @@ impl Renderer {
             lights.push(GpuLight::default());
         }
         let view_gpu: Vec<ShadowView> = if views.is_empty() {
-            vec![ShadowView::zeroed_view()]
+            vec![ShadowView::zeroed()]
         } else {
             views.iter().map(|v| v.gpu()).collect()
         };
@@ -498,7 +492,7 @@ impl Renderer {
         for p in &planar {
             all_views.push(ShadowView {
                 view_proj: p.unwrap_or(Mat4::ZERO).to_cols_array_2d(),
-                ..ShadowView::zeroed_view()
+                ..ShadowView::zeroed()
             });
         }
         let view_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -848,12 +842,7 @@ impl Renderer {
         };
         let vp = Mat4::from_cols_array_2d(&self.frame.view_proj);
         let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
-        for i in 0..8 {
-            let c = p + Vec3::new(
-                if i & 1 == 0 { -r } else { r },
-                if i & 2 == 0 { -r } else { r },
-                if i & 4 == 0 { -r } else { r },
-            );
+        for c in lights::box_corners((p - Vec3::splat(r), p + Vec3::splat(r))) {
             let q = vp * c.extend(1.0);
             if q.w <= 1e-4 {
                 return full;
@@ -1037,16 +1026,9 @@ impl Renderer {
                 for d in &self.scene.draws {
                     // Only objects wholly above the plane cast onto it (the receiver would
                     // project onto itself).
-                    let (lo, hi) = d.bounds;
-                    let lowest = (0..8)
-                        .map(|i| {
-                            let c = Vec3::new(
-                                if i & 1 == 0 { lo.x } else { hi.x },
-                                if i & 2 == 0 { lo.y } else { hi.y },
-                                if i & 4 == 0 { lo.z } else { hi.z },
-                            );
-                            p.truncate().dot(c) + p.w
-                        })
+                    let lowest = lights::box_corners(d.bounds)
+                        .iter()
+                        .map(|c| p.truncate().dot(*c) + p.w)
                         .fold(f32::INFINITY, f32::min);
                     if lowest < -1e-3 {
                         continue;
@@ -1282,12 +1264,6 @@ fn load_u32() -> wgpu::Operations<u32> {
     wgpu::Operations {
         load: wgpu::LoadOp::Load,
         store: wgpu::StoreOp::Store,
-    }
-}
-
-impl ShadowView {
-    fn zeroed_view() -> ShadowView {
-        bytemuck::Zeroable::zeroed()
     }
 }
 

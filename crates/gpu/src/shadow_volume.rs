@@ -221,6 +221,20 @@ mod tests {
     use super::*;
     use lightlab_scene::builtin::geom;
 
+    /// A single-sided 2×2 quad in the plane y = 0, facing up.
+    fn unit_quad() -> lightlab_scene::Mesh {
+        geom::quad(
+            "q",
+            [
+                Vec3::new(-1.0, 0.0, -1.0),
+                Vec3::new(-1.0, 0.0, 1.0),
+                Vec3::new(1.0, 0.0, 1.0),
+                Vec3::new(1.0, 0.0, -1.0),
+            ],
+            0,
+        )
+    }
+
     fn mesh_of(m: &lightlab_scene::Mesh) -> VolumeMesh {
         VolumeMesh::new(&m.positions, &m.indices)
     }
@@ -241,16 +255,7 @@ mod tests {
             mesh_of(&geom::cylinder("c", 0.3, 2.0, 12, 0)).closed,
             "cylinder"
         );
-        let q = geom::quad(
-            "q",
-            [
-                Vec3::new(-1.0, 0.0, -1.0),
-                Vec3::new(-1.0, 0.0, 1.0),
-                Vec3::new(1.0, 0.0, 1.0),
-                Vec3::new(1.0, 0.0, -1.0),
-            ],
-            0,
-        );
+        let q = unit_quad();
         assert!(!mesh_of(&q).closed);
     }
 
@@ -293,19 +298,7 @@ mod tests {
     fn a_point_light_volume_is_closed_and_outward() {
         for (mesh, closed) in [
             (geom::sphere("s", 1.0, 12, 6, 0), true),
-            (
-                geom::quad(
-                    "q",
-                    [
-                        Vec3::new(-1.0, 0.0, -1.0),
-                        Vec3::new(-1.0, 0.0, 1.0),
-                        Vec3::new(1.0, 0.0, 1.0),
-                        Vec3::new(1.0, 0.0, -1.0),
-                    ],
-                    0,
-                ),
-                false,
-            ),
+            (unit_quad(), false),
         ] {
             let m = mesh_of(&mesh);
             assert_eq!(m.closed, closed);
@@ -328,16 +321,7 @@ mod tests {
 
     #[test]
     fn an_open_quad_casts_from_both_sides() {
-        let q = geom::quad(
-            "q",
-            [
-                Vec3::new(-1.0, 0.0, -1.0),
-                Vec3::new(-1.0, 0.0, 1.0),
-                Vec3::new(1.0, 0.0, 1.0),
-                Vec3::new(1.0, 0.0, -1.0),
-            ],
-            0,
-        );
+        let q = unit_quad();
         let m = mesh_of(&q);
         for light in [Vec3::new(0.0, 3.0, 0.0), Vec3::new(0.0, -3.0, 0.0)] {
             let mut out = vec![];
