@@ -105,6 +105,23 @@ impl Bsdf {
         }
     }
 
+    /// A Lambertian BSDF of reflectance `albedo` (no transmission, no specular lobe): the
+    /// virtual receiver at a light-map texel, whose outgoing radiance with `albedo = 1` is
+    /// irradiance/π.
+    pub fn lambert(albedo: Vec3) -> Bsdf {
+        Bsdf {
+            base: albedo,
+            kd_scale: 1.0,
+            transmission: 0.0,
+            f0: Vec3::ZERO,
+            alpha: 1.0,
+            specular: false,
+            model: BrdfModel::Lambert,
+            exponent: 1.0,
+            p_spec: 0.0,
+        }
+    }
+
     /// The classical lobes of [`BrdfModel::Phong`] and [`BrdfModel::BlinnPhong`], from core
     /// (normalised, unit reflectance; scaled by `f0` as the specular colour).
     fn classic<R>(&self, f: impl FnOnce(&dyn Brdf) -> R) -> Option<R> {

@@ -11,4 +11,4 @@ pub mod lights;
 pub mod render;
 
 pub use accel::Accel;
-pub use render::{PathTracer, RenderError, RenderSettings};
+pub use render::{LightUse, PathTracer, RenderError, RenderSettings};

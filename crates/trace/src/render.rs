@@ -172,11 +172,43 @@ fn offset(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
     }
 }
 
+/// Which scattering depths a punctual light contributes to (per-light bake modes: a light whose
+/// direct part is rendered in real time contributes only to depths ≥ 2 of a bake).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightUse {
+    /// Direct light (next-event estimation at the first scattering event).
+    pub direct: bool,
+    /// Light reaching the first surface after one or more bounces.
+    pub indirect: bool,
+}
+
+impl LightUse {
+    pub const ALL: LightUse = LightUse {
+        direct: true,
+        indirect: true,
+    };
+}
+
+/// Where a path starts.
+enum Start {
+    /// A camera ray.
+    Ray(Vec3, Vec3),
+    /// A surface point with its own BSDF (a light-map texel), seen from along `ns`.
+    Surface {
+        p: Vec3,
+        ng: Vec3,
+        ns: Vec3,
+        bsdf: Bsdf,
+    },
+}
+
 /// The path tracer over a prepared scene.
 pub struct PathTracer<'a> {
     pub scene: &'a Scene,
     pub accel: &'a Accel,
     pub lights: LightSet,
+    /// Per punctual light (index into `scene.lights`): which depths it lights. Empty = all.
+    pub light_use: Vec<LightUse>,
 }
 
 impl<'a> PathTracer<'a> {
@@ -185,22 +217,82 @@ impl<'a> PathTracer<'a> {
             scene,
             accel,
             lights: LightSet::new(scene),
+            light_use: Vec::new(),
         }
     }
 
     /// Radiance along one camera ray.
     pub fn radiance(&self, origin: Vec3, dir: Vec3, s: &RenderSettings, rng: &mut Rng) -> Vec3 {
+        self.trace(Start::Ray(origin, dir), s, rng)
+    }
+
+    /// Radiance leaving a surface point `p` (geometric normal `ng`, shading normal `ns`, both on
+    /// the lit side) along `ns`, through the Lambertian BSDF of reflectance `albedo`. With
+    /// `albedo = 1` this is irradiance/π, the quantity a light-map stores. Depth counts from
+    /// this point: its direct light has depth 1.
+    pub fn surface_radiance(
+        &self,
+        p: Vec3,
+        ng: Vec3,
+        ns: Vec3,
+        albedo: Vec3,
+        s: &RenderSettings,
+        rng: &mut Rng,
+    ) -> Vec3 {
+        let bsdf = Bsdf::lambert(albedo);
+        self.trace(Start::Surface { p, ng, ns, bsdf }, s, rng)
+    }
+
+    fn trace(&self, start: Start, s: &RenderSettings, rng: &mut Rng) -> Vec3 {
         let scene = self.scene;
         let keep = |depth: u32| depth >= s.min_depth && depth <= s.max_depth;
         let mut l = Vec3::ZERO;
         let mut beta = Vec3::ONE;
-        let (mut o, mut d) = (origin, dir);
+        let (mut o, mut d, mut first) = match start {
+            Start::Ray(o, d) => (o, d, None),
+            Start::Surface { p, ng, ns, bsdf } => (p, -ns, Some((p, ng, ns, bsdf))),
+        };
         // pdf of the BSDF sample that produced `d` (0 for the camera ray: no MIS).
         let mut prev_pdf = 0.0f32;
-        let mut prev_p = origin;
+        let mut prev_p = o;
         // Scattering events so far.
         let mut depth = 0u32;
         loop {
+            if let Some((p, ng, ns, bsdf)) = first.take() {
+                // The texel itself: no emission, straight to scattering.
+                let frame = Frame::from_normal(ns);
+                let sf = Surface {
+                    p,
+                    ng,
+                    ns,
+                    uv: Vec2::ZERO,
+                    material: usize::MAX,
+                };
+                let wo_l = Vec3::Z;
+                depth += 1;
+                if keep(depth) {
+                    l += beta * self.direct(&sf, ng, &frame, wo_l, &bsdf, depth, rng);
+                }
+                if depth >= s.max_depth
+                    && !(self.lights.has_emitters() || scene.environment.is_some())
+                {
+                    break;
+                }
+                let Some((wi_l, f, pdf)) = bsdf.sample(wo_l, rng.next_f32(), rng.next_vec2())
+                else {
+                    break;
+                };
+                let wi = frame.to_world(wi_l);
+                if wi.dot(ng) <= 0.0 {
+                    break;
+                }
+                beta *= f * wi_l.z / pdf;
+                prev_pdf = pdf;
+                prev_p = p;
+                o = offset(p, ng, wi);
+                d = wi;
+                continue;
+            }
             let Some(hit) = self.accel.intersect(o, d, f32::INFINITY) else {
                 if let Some(env) = &scene.environment
                     && keep(depth)
@@ -255,7 +347,7 @@ impl<'a> PathTracer<'a> {
             depth += 1;
             // Next-event estimation.
             if keep(depth) {
-                l += beta * self.direct(&sf, ng, &frame, wo_l, &bsdf, rng);
+                l += beta * self.direct(&sf, ng, &frame, wo_l, &bsdf, depth, rng);
             }
             if depth >= s.max_depth {
                 // Only emission reached by a BSDF sample can still count (MIS partner of the
@@ -294,6 +386,7 @@ impl<'a> PathTracer<'a> {
 
     /// Direct light at a surface: every punctual light, one emitter sample and one
     /// environment sample, each with MIS where the light is not a delta.
+    #[allow(clippy::too_many_arguments)]
     fn direct(
         &self,
         sf: &Surface,
@@ -301,6 +394,7 @@ impl<'a> PathTracer<'a> {
         frame: &Frame,
         wo_l: Vec3,
         bsdf: &Bsdf,
+        depth: u32,
         rng: &mut Rng,
     ) -> Vec3 {
         let scene = self.scene;
@@ -336,6 +430,13 @@ impl<'a> PathTracer<'a> {
         };
         for i in 0..scene.lights.len() {
             let u = rng.next_vec2();
+            let used = self
+                .light_use
+                .get(i)
+                .is_none_or(|u| if depth <= 1 { u.direct } else { u.indirect });
+            if !used {
+                continue;
+            }
             if let Some(ls) = sample_punctual(scene, i, sf.p, u) {
                 add(ls, &mut l);
             }

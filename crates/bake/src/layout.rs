@@ -1,0 +1,368 @@
+//! Light-map UVs (TEXCOORD_1) and their pages.
+//!
+//! A mesh that already has TEXCOORD_1 keeps it untouched: each of its instances gets a page of
+//! its own, sized for the requested texel density (how engines that take one light-map per mesh,
+//! Bevy among them, use authored UVs). Every other mesh is unwrapped by `uvunwrap` (chart
+//! segmentation in a normal cone, planar projection or LSCM, shape packing with padding): the
+//! mesh's UVs cover [0, 1] of its own layout and each instance gets a rectangle of a shared page
+//! at its own scale, the scheme of Bevy's `Lightmap::uv_rect` and Unity's `lightmapScaleOffset`.
+//! The unwrap splits vertices along chart seams; [`unwrap_scene`] rewrites the meshes so.
+//!
+//! The unwrap is deterministic (uvunwrap without its SIMD direct solver), so the same scene and
+//! settings give the same layout on any machine: a baked folder records its settings and
+//! [`unwrap_scene`] reproduces the UVs it was baked with.
+
+use crate::BakeError;
+use glam::{Mat3, Vec2, Vec3};
+use lightlab_scene::{Mesh, Scene};
+use serde::{Deserialize, Serialize};
+
+/// How light-map UVs are laid out.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LayoutSettings {
+    /// Texel density in texels per metre. Walls must be at least two texels thick for the
+    /// back-face invalidation to keep light from leaking under them.
+    pub texels_per_metre: f32,
+    /// Empty texels around each chart (≥ 2 for bicubic sampling).
+    pub padding: u32,
+    /// Largest page side; a scene that needs more gets an error naming the density to lower.
+    pub max_page_size: u32,
+}
+
+impl Default for LayoutSettings {
+    fn default() -> Self {
+        LayoutSettings {
+            texels_per_metre: 32.0,
+            padding: 2,
+            max_page_size: 4096,
+        }
+    }
+}
+
+/// Where an instance's light-map lives: page coordinates = `offset + uv1 · scale`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct InstanceRect {
+    pub page: u32,
+    pub offset: [f32; 2],
+    pub scale: [f32; 2],
+}
+
+impl InstanceRect {
+    #[inline]
+    pub fn page_uv(&self, uv1: Vec2) -> Vec2 {
+        Vec2::from(self.offset) + uv1 * Vec2::from(self.scale)
+    }
+}
+
+/// The light-map layout of a scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Layout {
+    pub settings: LayoutSettings,
+    /// (width, height) of each page in texels.
+    pub pages: Vec<[u32; 2]>,
+    /// One per scene instance (`None` for an instance whose mesh has no triangles).
+    pub instances: Vec<Option<InstanceRect>>,
+    /// Charts made by the unwrap (0 when every mesh had authored UVs).
+    pub charts: u32,
+    /// Fraction of page texels covered by surface.
+    pub utilization: f32,
+}
+
+impl Layout {
+    pub fn texel_count(&self) -> u64 {
+        self.pages.iter().map(|p| p[0] as u64 * p[1] as u64).sum()
+    }
+}
+
+/// Linear scale of an instance transform (cube root of the volume scale).
+fn instance_scale(m: &glam::Mat4) -> f32 {
+    let d = Mat3::from_mat4(*m).determinant().abs();
+    if d.is_finite() && d > 0.0 {
+        d.cbrt()
+    } else {
+        1.0
+    }
+}
+
+fn tri_area(a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    0.5 * (b - a).cross(c - a).length()
+}
+
+/// Give every instanced mesh light-map UVs and return the layout. Meshes are rewritten where
+/// the unwrap splits vertices along chart seams (all attributes are carried over).
+pub fn unwrap_scene(scene: &mut Scene, settings: &LayoutSettings) -> Result<Layout, BakeError> {
+    if !(settings.texels_per_metre.is_finite() && settings.texels_per_metre > 0.0) {
+        return Err(BakeError::Settings(format!(
+            "texel density must be positive, got {}",
+            settings.texels_per_metre
+        )));
+    }
+    if settings.max_page_size < 16 || settings.max_page_size > 16384 {
+        return Err(BakeError::Settings(format!(
+            "page size must be in [16, 16384], got {}",
+            settings.max_page_size
+        )));
+    }
+    let mut per_mesh: Vec<Vec<usize>> = vec![vec![]; scene.meshes.len()];
+    for (i, inst) in scene.instances.iter().enumerate() {
+        per_mesh[inst.mesh].push(i);
+    }
+    let mut instances = vec![None; scene.instances.len()];
+    let mut pages: Vec<[u32; 2]> = vec![];
+    // Meshes to unwrap: instanced, with triangles, without authored UVs.
+    let todo: Vec<usize> = (0..scene.meshes.len())
+        .filter(|&m| {
+            !per_mesh[m].is_empty()
+                && scene.meshes[m].triangle_count() > 0
+                && scene.meshes[m].uv1.is_none()
+        })
+        .collect();
+    // Refuse a request that cannot fit before the unwrap allocates its raster.
+    let area: f64 = scene
+        .instances
+        .iter()
+        .map(|inst| {
+            let m = &scene.meshes[inst.mesh];
+            m.indices
+                .chunks_exact(3)
+                .map(|t| {
+                    let [a, b, c] = [t[0], t[1], t[2]]
+                        .map(|i| inst.transform.transform_point3(m.positions[i as usize]));
+                    tri_area(a, b, c) as f64
+                })
+                .sum::<f64>()
+        })
+        .sum();
+    let need = area * (settings.texels_per_metre as f64).powi(2);
+    let page = settings.max_page_size as f64;
+    if need > page * page {
+        return Err(BakeError::Settings(format!(
+            "the scene's {area:.1} m² need {need:.0} texels at {} per metre, more than one \
+             {}² page holds; lower the texel density",
+            settings.texels_per_metre, settings.max_page_size
+        )));
+    }
+    let mut charts = 0;
+    let mut covered = 0.0f64;
+    if !todo.is_empty() {
+        let positions: Vec<Vec<[f32; 3]>> = todo
+            .iter()
+            .map(|&m| {
+                scene.meshes[m]
+                    .positions
+                    .iter()
+                    .map(|p| p.to_array())
+                    .collect()
+            })
+            .collect();
+        let scales: Vec<Vec<f32>> = todo
+            .iter()
+            .map(|&m| {
+                per_mesh[m]
+                    .iter()
+                    .map(|&i| instance_scale(&scene.instances[i].transform))
+                    .collect()
+            })
+            .collect();
+        let inputs: Vec<uvunwrap::MeshInput> = todo
+            .iter()
+            .enumerate()
+            .map(|(k, &m)| uvunwrap::MeshInput {
+                instance_scales: &scales[k],
+                ..uvunwrap::MeshInput::new(&positions[k], &scene.meshes[m].indices)
+            })
+            .collect();
+        let options = uvunwrap::Options {
+            density: uvunwrap::Density::Fixed {
+                texels_per_unit: settings.texels_per_metre,
+                page_size: None,
+            },
+            padding: settings.padding,
+            max_chart_size: settings.max_page_size - 2 * settings.padding,
+            ..Default::default()
+        };
+        let atlas =
+            uvunwrap::generate(&inputs, &options).map_err(|e| BakeError::Unwrap(e.to_string()))?;
+        if atlas.width > settings.max_page_size || atlas.height > settings.max_page_size {
+            return Err(BakeError::Settings(format!(
+                "the light-map page would be {}×{} texels, more than the largest page {}; \
+                 lower the texel density (now {} per metre)",
+                atlas.width, atlas.height, settings.max_page_size, settings.texels_per_metre
+            )));
+        }
+        for _ in 0..atlas.page_count {
+            pages.push([atlas.width, atlas.height]);
+        }
+        charts = atlas.chart_count;
+        covered += atlas.utilization as f64 * (atlas.width as f64 * atlas.height as f64);
+        for (k, &m) in todo.iter().enumerate() {
+            let out = &atlas.meshes[k];
+            let mesh = &mut scene.meshes[m];
+            remap_mesh(mesh, out);
+            for (j, &i) in per_mesh[m].iter().enumerate() {
+                let r = out.instances[j];
+                instances[i] = Some(InstanceRect {
+                    page: r.page,
+                    offset: r.min,
+                    scale: [r.max[0] - r.min[0], r.max[1] - r.min[1]],
+                });
+            }
+        }
+    }
+    // Authored UVs: one page per instance.
+    for (m, insts) in per_mesh.iter().enumerate() {
+        if todo.contains(&m) {
+            continue;
+        }
+        let mesh = &scene.meshes[m];
+        let Some(uv1) = &mesh.uv1 else { continue };
+        if mesh.triangle_count() == 0 {
+            continue;
+        }
+        if uv1.len() != mesh.positions.len() {
+            return Err(BakeError::Scene(format!(
+                "mesh '{}' has {} TEXCOORD_1 values for {} vertices",
+                mesh.name,
+                uv1.len(),
+                mesh.positions.len()
+            )));
+        }
+        let uv_area: f32 = mesh
+            .indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| uv1[i as usize]);
+                0.5 * (b - a).perp_dot(c - a).abs()
+            })
+            .sum();
+        for &i in insts {
+            let tf = scene.instances[i].transform;
+            let area: f32 = mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| {
+                    let [a, b, c] =
+                        [t[0], t[1], t[2]].map(|i| tf.transform_point3(mesh.positions[i as usize]));
+                    tri_area(a, b, c)
+                })
+                .sum();
+            let side = ((area / uv_area.max(1e-12)).sqrt() * settings.texels_per_metre).ceil();
+            let side = (side as u32).clamp(8, settings.max_page_size);
+            covered += (uv_area as f64 * side as f64 * side as f64).min((side * side) as f64);
+            instances[i] = Some(InstanceRect {
+                page: pages.len() as u32,
+                offset: [0.0, 0.0],
+                scale: [1.0, 1.0],
+            });
+            pages.push([side, side]);
+        }
+    }
+    let total: f64 = pages.iter().map(|p| p[0] as f64 * p[1] as f64).sum();
+    Ok(Layout {
+        settings: *settings,
+        pages,
+        instances,
+        charts,
+        utilization: if total > 0.0 {
+            (covered / total) as f32
+        } else {
+            0.0
+        },
+    })
+}
+
+/// Rebuild a mesh from the unwrap's output vertices (`xref` = source vertex).
+fn remap_mesh(mesh: &mut Mesh, out: &uvunwrap::OutputMesh) {
+    let pick = |v: &[Vec3]| -> Vec<Vec3> {
+        if v.is_empty() {
+            vec![]
+        } else {
+            out.vertices.iter().map(|o| v[o.xref as usize]).collect()
+        }
+    };
+    mesh.positions = pick(&mesh.positions);
+    mesh.normals = pick(&mesh.normals);
+    if !mesh.tangents.is_empty() {
+        mesh.tangents = out
+            .vertices
+            .iter()
+            .map(|o| mesh.tangents[o.xref as usize])
+            .collect();
+    }
+    if !mesh.uv0.is_empty() {
+        mesh.uv0 = out
+            .vertices
+            .iter()
+            .map(|o| mesh.uv0[o.xref as usize])
+            .collect();
+    }
+    mesh.uv1 = Some(out.vertices.iter().map(|o| Vec2::from(o.uv)).collect());
+    mesh.indices = out.indices.clone();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cornell_unwraps_with_one_rect_per_instance_inside_its_page() {
+        let mut s = lightlab_scene::builtin::builtin("cornell").unwrap();
+        let tris: usize = s.meshes.iter().map(|m| m.triangle_count()).sum();
+        let l = unwrap_scene(&mut s, &LayoutSettings::default()).unwrap();
+        assert_eq!(l.instances.len(), s.instances.len());
+        assert_eq!(
+            s.meshes.iter().map(|m| m.triangle_count()).sum::<usize>(),
+            tris
+        );
+        for (inst, r) in s.instances.iter().zip(&l.instances) {
+            let r = r.unwrap();
+            let [w, h] = l.pages[r.page as usize];
+            let mesh = &s.meshes[inst.mesh];
+            let uv1 = mesh.uv1.as_ref().unwrap();
+            assert_eq!(uv1.len(), mesh.positions.len());
+            for &u in uv1 {
+                let p = r.page_uv(u) * Vec2::new(w as f32, h as f32);
+                // Padding keeps every chart two texels from the page edges.
+                assert!(
+                    p.min_element() >= 1.99 && p.x <= w as f32 - 1.99 && p.y <= h as f32 - 1.99
+                );
+            }
+        }
+        assert!(
+            l.utilization > 0.2 && l.utilization <= 1.0,
+            "{}",
+            l.utilization
+        );
+    }
+
+    #[test]
+    fn authored_uvs_are_kept_and_bad_settings_are_errors() {
+        let mut s = lightlab_scene::builtin::builtin("cornell").unwrap();
+        let m = s.instances[0].mesh;
+        let uv: Vec<Vec2> = s.meshes[m].uv0.iter().map(|u| *u * 0.9 + 0.05).collect();
+        s.meshes[m].uv1 = Some(uv.clone());
+        let l = unwrap_scene(&mut s, &LayoutSettings::default()).unwrap();
+        assert_eq!(s.meshes[m].uv1.as_ref().unwrap(), &uv);
+        let r = l.instances[0].unwrap();
+        assert_eq!(r.scale, [1.0, 1.0]);
+        assert!(l.pages.len() >= 2);
+        let bad = LayoutSettings {
+            texels_per_metre: -1.0,
+            ..Default::default()
+        };
+        assert!(matches!(
+            unwrap_scene(&mut s, &bad),
+            Err(BakeError::Settings(_))
+        ));
+        let huge = LayoutSettings {
+            texels_per_metre: 100000.0,
+            max_page_size: 1024,
+            ..Default::default()
+        };
+        let mut s = lightlab_scene::builtin::builtin("cornell").unwrap();
+        assert!(matches!(
+            unwrap_scene(&mut s, &huge),
+            Err(BakeError::Settings(_))
+        ));
+    }
+}

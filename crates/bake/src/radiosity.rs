@@ -1,0 +1,463 @@
+//! Radiosity light-maps after CaLight (Fuchs 2005, §3.3; `reference/seed-000` §2.4–2.6).
+//!
+//! One patch per valid light-map texel. Steps, in CaLight's order:
+//!
+//! 1. **Direct light.** Punctual lights (point, spot) deposit `ΔE = I·spot·cosθ/d²` at every
+//!    patch with an unoccluded ray; below one patch size, `d` is clamped to the patch size and
+//!    the cosine dropped (CaLight's guard against a diverging point light). The sun is
+//!    **multi-sampled**: `sun_samples` jittered points across the patch and across the sun's
+//!    disc, `ΔE = E_sun·hits/samples·cosθ`, then CaLight's 3×3 smoothing (weights 1, ¼,
+//!    1/16 over valid patches). The sky (the environment) is an emitter in the same way:
+//!    `sky_samples` cosine-distributed rays per patch, `ΔE = π·mean(L_sky)` over unoccluded
+//!    rays. Emissive surfaces get their exitance `π·L_e` as unshot radiosity and shoot like
+//!    every other patch.
+//! 2. **Bounce light: progressive-refinement shooting** (Southwell / Cohen–Wallace). Each step
+//!    selects a shooter: for every surface (an instance) `min(10, patches/2)` random n×n blocks,
+//!    the best by unshot R+G+B averaged over the block; below the threshold a full search takes
+//!    the best patch of the first surface that still holds one above it; with none, stop. The
+//!    block's patches (same instance, normals within 25°) are grouped: power `Φ = Σ U_k·A_k`,
+//!    centre and normal averaged. Every receiver j the group faces gets
+//!    `ΔE_j = Φ·cosθ_I·cosθ_j / (π·max(r², A_I))`, with `A_I·cosθ_I cosθ_j/(π r_safe²) ≤ 1`
+//!    (CaLight's `min(F, 1)` and near-field clamp `r_safe = max(r, √A_I)`), visibility by a BVH
+//!    ray from centre to centre, and `ρ_j·ΔE_j` joins j's unshot radiosity. The group's unshot
+//!    radiosity is then zero: absorbed energy leaves the system, which guarantees progress.
+//! 3. The light-map value is `E/π` (incident irradiance over π): rendered radiance is
+//!    albedo × light-map, as Fuchs's "diffuse texture × light-map".
+//!
+//! Deviations, each for a reason: (a) ρ is the material's diffuse albedo per channel (CaLight
+//! uses one global 0.3; the thesis speaks of "the diffuse reflectivity of the surface"); (b) the
+//! group shoots its summed *power* rather than its summed radiosity times the mean area, which
+//! is the same for equal patches and exact for unequal ones; (c) the stop threshold is relative
+//! to the largest initial unshot radiosity rather than absolute in CaLight's units, so one
+//! default works for any scene scale; the unshot energy left is reported; (d) there is no
+//! surface-to-surface PVS: the plane test is done per receiver (cosθ ≤ 0 skips) and the BVH
+//! makes a ray cheap.
+//!
+//! Energy is accumulated in f64.
+
+use crate::texels::{TexelSample, Texels};
+use crate::{BakeError, LightMode, Progress};
+use glam::{DVec3, Vec3};
+use lightlab_core::sampling::{Frame, Rng, cosine_hemisphere, hammersley};
+use lightlab_scene::{LightKind, Scene};
+use lightlab_trace::Accel;
+use lightlab_trace::lights::sample_punctual;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RadiositySettings {
+    /// Shooter grouping n (n×n patches; CaLight's BlockSize, default 3, range 1..8).
+    pub block_size: u32,
+    /// Stop when no patch holds unshot radiosity (R+G+B) above this fraction of the largest
+    /// initial one (CaLight's StopUE, made relative).
+    pub stop: f64,
+    /// Sun samples per patch (CaLight: 13 for an unclipped patch).
+    pub sun_samples: u32,
+    /// Sky rays per patch.
+    pub sky_samples: u32,
+    /// Safety limit on shooting steps.
+    pub max_shots: u64,
+}
+
+impl Default for RadiositySettings {
+    fn default() -> Self {
+        RadiositySettings {
+            block_size: 3,
+            stop: 1e-4,
+            sun_samples: 16,
+            sky_samples: 256,
+            max_shots: 2_000_000,
+        }
+    }
+}
+
+/// What the solver reports.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RadiosityStats {
+    pub patches: usize,
+    pub shots: u64,
+    pub rays: u64,
+    /// Unshot power left over total power emitted and reflected (a measure of convergence).
+    pub unshot_fraction: f64,
+    /// Whether `max_shots` ended the loop before the threshold was met.
+    pub hit_shot_limit: bool,
+}
+
+struct Patch {
+    p: Vec3,
+    n: Vec3,
+    ng: Vec3,
+    area: f64,
+    rho: DVec3,
+    page: usize,
+    x: u32,
+    y: u32,
+    instance: u32,
+}
+
+/// Solve. Returns the light-map values (E/π per texel and page; zero where invalid).
+#[allow(clippy::too_many_arguments)]
+pub fn solve(
+    scene: &Scene,
+    accel: &Accel,
+    texels: &Texels,
+    valid: &[Vec<bool>],
+    modes: &[LightMode],
+    settings: &RadiositySettings,
+    seed: u64,
+    progress: Progress,
+) -> Result<(Vec<Vec<Vec3>>, RadiosityStats), BakeError> {
+    if !(1..=8).contains(&settings.block_size) {
+        return Err(BakeError::Settings(format!(
+            "radiosity block size must be in 1..8, got {}",
+            settings.block_size
+        )));
+    }
+    if !(settings.stop > 0.0 && settings.stop < 1.0) {
+        return Err(BakeError::Settings(format!(
+            "radiosity stop threshold must be in (0, 1), got {}",
+            settings.stop
+        )));
+    }
+    // Patches and a texel → patch index per page.
+    let mut patches: Vec<Patch> = vec![];
+    let mut index: Vec<Vec<u32>> = vec![];
+    for (pi, (page, valid)) in texels.pages.iter().zip(valid).enumerate() {
+        let mut idx = vec![u32::MAX; page.samples.len()];
+        for (i, s) in page.samples.iter().enumerate() {
+            if let Some(s) = s
+                && valid[i]
+                && s.area > 0.0
+            {
+                idx[i] = patches.len() as u32;
+                patches.push(Patch {
+                    p: s.p,
+                    n: s.ns,
+                    ng: s.ng,
+                    area: s.area as f64,
+                    rho: s.albedo.as_dvec3().clamp(DVec3::ZERO, DVec3::splat(0.999)),
+                    page: pi,
+                    x: i as u32 % page.width,
+                    y: i as u32 / page.width,
+                    instance: s.instance,
+                });
+            }
+        }
+        index.push(idx);
+    }
+    let np = patches.len();
+    let mut stats = RadiosityStats {
+        patches: np,
+        ..Default::default()
+    };
+    // Incident irradiance counted in the light-map, and unshot radiosity.
+    let mut total = vec![DVec3::ZERO; np];
+    let mut unshot = vec![DVec3::ZERO; np];
+    let sample_of = |k: usize| -> &TexelSample {
+        let p = &patches[k];
+        let page = &texels.pages[p.page];
+        page.samples[(p.y * page.width + p.x) as usize]
+            .as_ref()
+            .expect("patches are valid texels")
+    };
+
+    // 1. Direct light.
+    progress("radiosity: direct light", 0, np);
+    let eps = |p: Vec3| 2e-5 * (1.0 + p.abs().max_element());
+    for (li, light) in scene.lights.iter().enumerate() {
+        let mode = modes.get(li).copied().unwrap_or(LightMode::Baked);
+        if mode == LightMode::Realtime {
+            continue;
+        }
+        let is_sun = matches!(light.kind, LightKind::Directional { .. });
+        let n_samples = if is_sun {
+            settings.sun_samples.max(1)
+        } else {
+            1
+        };
+        let de: Vec<DVec3> = (0..np)
+            .into_par_iter()
+            .map(|k| {
+                let pa = &patches[k];
+                let s = sample_of(k);
+                let mut rng = Rng::new(seed ^ ((li as u64 + 1) * 0x9e37), k as u64);
+                let mut sum = DVec3::ZERO;
+                for j in 0..n_samples {
+                    // Jitter across fully covered patches (CaLight samples the patch polygon).
+                    let p = if is_sun && s.coverage >= 0.999 && n_samples > 1 {
+                        let u = hammersley(j, n_samples) - 0.5;
+                        pa.p + s.dpdx * u.x + s.dpdy * u.y
+                    } else {
+                        pa.p
+                    };
+                    let Some(ls) = sample_punctual(scene, li, p, rng.next_vec2()) else {
+                        continue;
+                    };
+                    let cos = pa.n.dot(ls.wi);
+                    if cos <= 0.0 || ls.wi.dot(pa.ng) <= 0.0 {
+                        continue;
+                    }
+                    let o = p + pa.ng * eps(p);
+                    let (dir, tmax) = if ls.dist.is_finite() {
+                        (p + ls.wi * ls.dist - o, 1.0 - 1e-4)
+                    } else {
+                        (ls.wi, f32::INFINITY)
+                    };
+                    if accel.occluded(o, dir, tmax) {
+                        continue;
+                    }
+                    let mut v = ls.value.as_dvec3() * cos as f64;
+                    if ls.dist.is_finite() {
+                        // CaLight's near-field guard: below one patch size, d := patch size and
+                        // the cosine is dropped.
+                        let size = pa.area.sqrt();
+                        let d = ls.dist as f64;
+                        if d < size {
+                            v = ls.value.as_dvec3() * (d * d) / (size * size);
+                        }
+                    }
+                    sum += v;
+                }
+                sum / n_samples as f64
+            })
+            .collect();
+        let de = if is_sun {
+            smooth(&patches, &index, texels, de)
+        } else {
+            de
+        };
+        stats.rays += (np as u64) * n_samples as u64;
+        for k in 0..np {
+            if mode == LightMode::Baked {
+                total[k] += de[k];
+            }
+            unshot[k] += patches[k].rho * de[k];
+        }
+    }
+    if let Some(env) = &scene.environment {
+        let n = settings.sky_samples.max(1);
+        let de: Vec<DVec3> = (0..np)
+            .into_par_iter()
+            .map(|k| {
+                let pa = &patches[k];
+                let mut rng = Rng::new(seed ^ 0x5c1e5, k as u64);
+                let off = rng.next_vec2();
+                let frame = Frame::from_normal(pa.n);
+                let o = pa.p + pa.ng * eps(pa.p);
+                let mut sum = DVec3::ZERO;
+                for j in 0..n {
+                    let d = frame.to_world(cosine_hemisphere((hammersley(j, n) + off).fract_gl()));
+                    if d.dot(pa.ng) <= 0.0 || accel.occluded(o, d, f32::INFINITY) {
+                        continue;
+                    }
+                    sum += env.radiance(d).as_dvec3();
+                }
+                sum * PI / n as f64
+            })
+            .collect();
+        stats.rays += np as u64 * n as u64;
+        for k in 0..np {
+            total[k] += de[k];
+            unshot[k] += patches[k].rho * de[k];
+        }
+    }
+    // Emitters: exitance π·L_e, shot like any radiosity.
+    for (k, u) in unshot.iter_mut().enumerate() {
+        *u += sample_of(k).emission.as_dvec3() * PI;
+    }
+
+    // 2. Progressive refinement.
+    let key = |u: DVec3| u.x + u.y + u.z;
+    let initial_max = unshot.iter().map(|&u| key(u)).fold(0.0, f64::max);
+    let mut emitted_power: f64 = (0..np).map(|k| key(unshot[k]) * patches[k].area).sum();
+    if initial_max <= 0.0 {
+        return Ok((to_pages(texels, &index, &total), stats));
+    }
+    let threshold = settings.stop * initial_max;
+    // Surfaces: patches per instance.
+    let mut surfaces: Vec<Vec<u32>> = vec![];
+    {
+        let mut by_inst: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+        for (k, p) in patches.iter().enumerate() {
+            by_inst.entry(p.instance).or_default().push(k as u32);
+        }
+        surfaces.extend(by_inst.into_values());
+    }
+    let n = settings.block_size;
+    let block_of = |k: usize| -> Vec<usize> {
+        let p = &patches[k];
+        let page = &texels.pages[p.page];
+        let (bx, by) = (p.x / n * n, p.y / n * n);
+        let mut out = vec![];
+        for y in by..(by + n).min(page.height) {
+            for x in bx..(bx + n).min(page.width) {
+                let j = index[p.page][(y * page.width + x) as usize];
+                if j != u32::MAX {
+                    let q = &patches[j as usize];
+                    if q.instance == p.instance && q.ng.dot(p.ng) > 0.9 {
+                        out.push(j as usize);
+                    }
+                }
+            }
+        }
+        out
+    };
+    let block_value = |k: usize, unshot: &[DVec3]| -> f64 {
+        let b = block_of(k);
+        b.iter().map(|&j| key(unshot[j])).sum::<f64>() / b.len().max(1) as f64
+    };
+    let mut rng = Rng::new(seed, 0x5407);
+    let mut shots = 0u64;
+    loop {
+        // Select: random blocks per surface, the best of all.
+        let mut best = (0.0f64, usize::MAX);
+        for surf in &surfaces {
+            let samples = 10.min((surf.len() / 2).max(1));
+            for _ in 0..samples {
+                let k = surf[(rng.next_u32() as usize) % surf.len()] as usize;
+                let v = block_value(k, &unshot);
+                if v > best.0 {
+                    best = (v, k);
+                }
+            }
+        }
+        if best.0 < threshold {
+            // Full search: the best patch of the first surface that holds one above threshold.
+            best = (0.0, usize::MAX);
+            for surf in &surfaces {
+                for &k in surf {
+                    let v = key(unshot[k as usize]);
+                    if v >= threshold && v > best.0 {
+                        best = (v, k as usize);
+                    }
+                }
+                if best.1 != usize::MAX {
+                    break;
+                }
+            }
+            if best.1 == usize::MAX {
+                break;
+            }
+        }
+        if shots >= settings.max_shots {
+            stats.hit_shot_limit = true;
+            break;
+        }
+        // Group and shoot.
+        let group = block_of(best.1);
+        let mut power = DVec3::ZERO;
+        let (mut c, mut nrm, mut area) = (DVec3::ZERO, DVec3::ZERO, 0.0f64);
+        for &j in &group {
+            power += unshot[j] * patches[j].area;
+            c += patches[j].p.as_dvec3();
+            nrm += patches[j].n.as_dvec3();
+            area += patches[j].area;
+        }
+        let c = (c / group.len() as f64).as_vec3();
+        let nrm = nrm.normalize_or_zero().as_vec3();
+        let ng = patches[best.1].ng;
+        let a_avg = area / group.len() as f64;
+        for &j in &group {
+            unshot[j] = DVec3::ZERO;
+        }
+        let o = c + ng * eps(c);
+        let de: Vec<(usize, DVec3)> = (0..np)
+            .into_par_iter()
+            .filter_map(|j| {
+                let q = &patches[j];
+                let r = q.p - c;
+                let r2 = r.length_squared() as f64;
+                if r2 <= 0.0 {
+                    return None;
+                }
+                let cos_i = nrm.dot(r) as f64;
+                let cos_j = -(q.n.dot(r)) as f64;
+                if cos_i <= 0.0 || cos_j <= 0.0 || r.dot(ng) <= 0.0 || -r.dot(q.ng) <= 0.0 {
+                    return None;
+                }
+                let target = q.p + q.ng * eps(q.p);
+                if accel.occluded(o, target - o, 1.0 - 1e-4) {
+                    return None;
+                }
+                // cosθ_I·cosθ_j/r² from the unnormalised r: (n·r)(−n_j·r)/r⁴, no square roots.
+                let g = cos_i * cos_j / (r2 * r2);
+                // F_{j←I} = A_I·cosθ_I cosθ_j/(π r_safe²), r_safe² = max(r², Ā), capped at 1;
+                // ΔE_j = (Φ/A_I)·F.
+                let f = (area * g * r2 / (PI * r2.max(a_avg))).min(1.0);
+                Some((j, power / area * f))
+            })
+            .collect();
+        stats.rays += np as u64;
+        for (j, e) in de {
+            total[j] += e;
+            unshot[j] += patches[j].rho * e;
+        }
+        shots += 1;
+        if shots.is_multiple_of(64) && !progress("radiosity: shooting", shots as usize, 0) {
+            return Err(BakeError::Cancelled);
+        }
+    }
+    let left: f64 = (0..np).map(|k| key(unshot[k]) * patches[k].area).sum();
+    emitted_power = emitted_power.max(1e-300);
+    stats.shots = shots;
+    stats.unshot_fraction = left / emitted_power;
+    Ok((to_pages(texels, &index, &total), stats))
+}
+
+/// CaLight's sun smoothing: a weighted 3×3 average over valid patches of the same instance
+/// (centre 1, edges ¼, corners 1/16), from the values before smoothing.
+fn smooth(patches: &[Patch], index: &[Vec<u32>], texels: &Texels, de: Vec<DVec3>) -> Vec<DVec3> {
+    (0..patches.len())
+        .into_par_iter()
+        .map(|k| {
+            let p = &patches[k];
+            let page = &texels.pages[p.page];
+            let (mut sum, mut wsum) = (DVec3::ZERO, 0.0);
+            for dy in -1i32..=1 {
+                for dx in -1i32..=1 {
+                    let (x, y) = (p.x as i32 + dx, p.y as i32 + dy);
+                    if x < 0 || y < 0 || x >= page.width as i32 || y >= page.height as i32 {
+                        continue;
+                    }
+                    let j = index[p.page][(y as u32 * page.width + x as u32) as usize];
+                    if j == u32::MAX {
+                        continue;
+                    }
+                    let q = &patches[j as usize];
+                    if q.instance != p.instance || q.ng.dot(p.ng) < 0.9 {
+                        continue;
+                    }
+                    let w = match dx.abs() + dy.abs() {
+                        0 => 1.0,
+                        1 => 0.25,
+                        _ => 0.0625,
+                    };
+                    sum += de[j as usize] * w;
+                    wsum += w;
+                }
+            }
+            sum / wsum
+        })
+        .collect()
+}
+
+fn to_pages(texels: &Texels, index: &[Vec<u32>], total: &[DVec3]) -> Vec<Vec<Vec3>> {
+    texels
+        .pages
+        .iter()
+        .zip(index)
+        .map(|(_, idx)| {
+            idx.iter()
+                .map(|&k| {
+                    if k == u32::MAX {
+                        Vec3::ZERO
+                    } else {
+                        (total[k as usize] / PI).as_vec3()
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
