@@ -23,7 +23,8 @@ pub struct LayoutSettings {
     /// Texel density in texels per metre. Walls must be at least two texels thick for the
     /// back-face invalidation to keep light from leaking under them.
     pub texels_per_metre: f32,
-    /// Empty texels around each chart (≥ 2 for bicubic sampling).
+    /// Empty texels around each chart. Bicubic sampling reads two texels beyond a chart's
+    /// edge texel, so charts need three to stay apart.
     pub padding: u32,
     /// Largest page side; a scene that needs more gets an error naming the density to lower.
     pub max_page_size: u32,
@@ -33,7 +34,7 @@ impl Default for LayoutSettings {
     fn default() -> Self {
         LayoutSettings {
             texels_per_metre: 32.0,
-            padding: 2,
+            padding: 3,
             max_page_size: 4096,
         }
     }
