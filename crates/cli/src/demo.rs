@@ -119,17 +119,53 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 ssaa: 2,
                 ..Default::default()
             };
-            for technique in crate::raster_cmd::RASTER_TECHNIQUES {
+            // Light-maps on the scenes baked light is for (texel density per scene).
+            let density = match name {
+                "cornell" => Some(32.0),
+                "room" => Some(10.0),
+                "shadows" => Some(8.0),
+                _ => None,
+            };
+            let lightmap_techniques = density
+                .map(|_| crate::bake_cmd::LIGHTMAP_TECHNIQUES.to_vec())
+                .unwrap_or_default();
+            for technique in crate::raster_cmd::RASTER_TECHNIQUES
+                .into_iter()
+                .chain(lightmap_techniques)
+            {
                 let t = Instant::now();
-                let (img, times) = crate::raster_cmd::render_raster(
-                    ctx,
-                    &scene,
-                    technique,
-                    &args,
-                    settings.width,
-                    settings.height,
-                    0,
-                )?;
+                let (img, times) =
+                    if let Some(tpm) = density.filter(|_| technique.starts_with("lightmap")) {
+                        let bake = crate::bake_cmd::BakeArgs {
+                            texels_per_metre: tpm,
+                            samples: match quality {
+                                Quality::Preview => 8,
+                                Quality::Low => 64,
+                                Quality::High => 512,
+                            },
+                            ..Default::default()
+                        };
+                        let lm = crate::bake_cmd::lightmaps_for(&scene, technique, None, &bake)?;
+                        crate::bake_cmd::render_lightmap(
+                            ctx,
+                            &lm,
+                            technique,
+                            &args,
+                            settings.width,
+                            settings.height,
+                            0,
+                        )?
+                    } else {
+                        crate::raster_cmd::render_raster(
+                            ctx,
+                            &scene,
+                            technique,
+                            &args,
+                            settings.width,
+                            settings.height,
+                            0,
+                        )?
+                    };
                 let seconds = t.elapsed().as_secs_f64();
                 let frame_ms = if times.gpu_ms.is_empty() {
                     times.wall_ms

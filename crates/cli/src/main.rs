@@ -3,6 +3,7 @@
 //!
 //! Exit codes: 0 success, 1 error (bad input, failed I/O), 2 not implemented yet.
 
+mod bake_cmd;
 mod bench;
 mod demo;
 mod raster_cmd;
@@ -64,6 +65,11 @@ enum Command {
         method: String,
         #[arg(long, default_value = "baked")]
         out: PathBuf,
+        #[command(flatten)]
+        options: bake_cmd::BakeArgs,
+        /// Print the bake's figures as one JSON object on the last line.
+        #[arg(long)]
+        json: bool,
     },
     /// Render a scene with a technique (`reference`, `direct`, ...).
     Render(render::RenderArgs),
@@ -204,11 +210,15 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
-        Command::Bake { scene, method, .. } => {
-            load_scene(&scene, false)?;
-            Err(not_implemented(format!(
-                "bake method '{method}' (light-map, SH and PRT bakers are planned)"
-            )))
+        Command::Bake {
+            scene,
+            method,
+            out,
+            options,
+            json,
+        } => {
+            let scene = load_scene(&scene, false)?;
+            bake_cmd::run(&scene, &method, &out, &options, json)
         }
         Command::Render(args) => render::run(args),
         Command::Compare {

@@ -55,6 +55,9 @@ pub struct RasterArgs {
     /// Shadow variant: zfail|zpass (shadow volumes), depth|linear|planar (shadow maps).
     #[arg(long, value_enum)]
     pub shadow_variant: Option<VariantArg>,
+    /// Light-map sampling of `lightmap` and `lightmap+phong`: bilinear or bicubic.
+    #[arg(long, default_value = "bilinear")]
+    pub lightmap_filter: String,
     /// Ambient term: `env` (the scene's environment as 9 SH coefficients), `none`, or a
     /// constant sky radiance `r,g,b`.
     #[arg(long, default_value = "env")]
@@ -78,6 +81,7 @@ impl Default for RasterArgs {
             light_radius: None,
             brdf: None,
             shadow_variant: None,
+            lightmap_filter: "bilinear".into(),
             ambient: "env".into(),
             shadow_size: 2048,
             pcf: 1,

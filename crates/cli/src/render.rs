@@ -11,12 +11,14 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// Techniques `lightlab render` knows of, with whether they are built yet.
-pub const TECHNIQUES: [(&str, bool); 5] = [
+pub const TECHNIQUES: [(&str, bool); 7] = [
     ("reference", true),
     ("direct", true),
     ("phong", true),
     ("phong-shadow-volumes", true),
     ("phong-shadow-maps", true),
+    ("lightmap", true),
+    ("lightmap+phong", true),
 ];
 
 #[derive(Args)]
@@ -25,7 +27,9 @@ pub struct RenderArgs {
     #[arg(long)]
     pub scene: String,
     /// `reference` (path-traced ground truth), `direct` (direct light only), or a GPU
-    /// technique: `phong`, `phong-shadow-volumes`, `phong-shadow-maps`.
+    /// technique: `phong`, `phong-shadow-volumes`, `phong-shadow-maps`, `lightmap` (baked
+    /// light only) or `lightmap+phong` (baked indirect light plus dynamic lights and shadow
+    /// volumes). The light-map techniques read `--baked DIR` or bake first.
     #[arg(long, default_value = "reference")]
     pub technique: String,
     /// Folder of baked data, for techniques that use it.
@@ -66,6 +70,8 @@ pub struct RenderArgs {
     pub json: bool,
     #[command(flatten)]
     pub raster: crate::raster_cmd::RasterArgs,
+    #[command(flatten)]
+    pub bake: crate::bake_cmd::BakeArgs,
     /// Output image: .exr (linear) or .png (tone-mapped sRGB).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -131,7 +137,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
         });
     }
     crate::raster_cmd::apply_brdf(&mut scene, a.raster.brdf.as_deref())?;
-    if crate::raster_cmd::RASTER_TECHNIQUES.contains(&a.technique.as_str()) {
+    if crate::raster_cmd::RASTER_TECHNIQUES.contains(&a.technique.as_str())
+        || crate::bake_cmd::LIGHTMAP_TECHNIQUES.contains(&a.technique.as_str())
+    {
         return run_raster(&a, &scene);
     }
     let settings = RenderSettings {
@@ -175,8 +183,12 @@ fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
     let ctx = crate::raster_cmd::context()?;
     let (w, h) = (a.width, a.height.unwrap_or(a.width));
     let t0 = Instant::now();
-    let (img, times) =
-        crate::raster_cmd::render_raster(&ctx, scene, &a.technique, &a.raster, w, h, a.camera)?;
+    let (img, times) = if crate::bake_cmd::LIGHTMAP_TECHNIQUES.contains(&a.technique.as_str()) {
+        let lm = crate::bake_cmd::lightmaps_for(scene, &a.technique, a.baked.as_deref(), &a.bake)?;
+        crate::bake_cmd::render_lightmap(&ctx, &lm, &a.technique, &a.raster, w, h, a.camera)?
+    } else {
+        crate::raster_cmd::render_raster(&ctx, scene, &a.technique, &a.raster, w, h, a.camera)?
+    };
     let secs = t0.elapsed().as_secs_f64();
     write_output(a, &img)?;
     let gpu: f64 = times.gpu_ms.values().sum();

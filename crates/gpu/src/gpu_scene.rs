@@ -32,6 +32,16 @@ pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     }
 }
 
+/// Where an instance's light-map lives in the light-map texture array: array coordinates =
+/// `offset + uv1 · scale` on layer `page` (the upload adds `page` to x, which the shader splits
+/// off again).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvRect {
+    pub page: u32,
+    pub offset: [f32; 2],
+    pub scale: [f32; 2],
+}
+
 /// One instance: a range of the index buffer with one material.
 #[derive(Clone, Debug)]
 pub struct Draw {
@@ -178,12 +188,23 @@ fn upload_texture(device: &wgpu::Device, queue: &wgpu::Queue, t: &Texture) -> wg
 
 impl GpuScene {
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> GpuScene {
+        Self::with_lightmap_uvs(device, queue, scene, None)
+    }
+
+    /// Upload with UV1 mapped into a light-map array: `rects[instance]`.
+    pub fn with_lightmap_uvs(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        rects: Option<&[Option<UvRect>]>,
+    ) -> GpuScene {
         let mut vertices: Vec<Vertex> = vec![];
         let mut indices: Vec<u32> = vec![];
         let mut draws = vec![];
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for inst in &scene.instances {
+        for (ii, inst) in scene.instances.iter().enumerate() {
             let mesh = &scene.meshes[inst.mesh];
+            let rect = rects.and_then(|r| r.get(ii).copied().flatten());
             let nm = inst.normal_matrix();
             let m3 = Mat3::from_mat4(inst.transform);
             let flip = if m3.determinant() < 0.0 { -1.0 } else { 1.0 };
@@ -211,11 +232,20 @@ impl GpuScene {
                     normal: n.to_array(),
                     tangent: t.to_array(),
                     uv0: mesh.uv0.get(i).map_or([0.0; 2], |u| u.to_array()),
-                    uv1: mesh
-                        .uv1
-                        .as_ref()
-                        .and_then(|u| u.get(i))
-                        .map_or([0.0; 2], |u| u.to_array()),
+                    uv1: {
+                        let u = mesh
+                            .uv1
+                            .as_ref()
+                            .and_then(|u| u.get(i))
+                            .map_or([0.0; 2], |u| u.to_array());
+                        match rect {
+                            Some(r) => [
+                                r.page as f32 + r.offset[0] + u[0] * r.scale[0],
+                                r.offset[1] + u[1] * r.scale[1],
+                            ],
+                            None => u,
+                        }
+                    },
                 });
             }
             let first_index = indices.len() as u32;

@@ -14,7 +14,7 @@
 //!    the light) then `lighting` (additive, where the stencil is 0);
 //! 4. `tonemap`: the displayed 8-bit frame.
 
-use crate::gpu_scene::{GpuScene, vertex_layout};
+use crate::gpu_scene::{GpuScene, UvRect, vertex_layout};
 use crate::lights::{self, Attenuation, ShadowProjection};
 use crate::shadow_volume::{LightPos, build_volume};
 use crate::uniforms::*;
@@ -102,6 +102,95 @@ impl ShadowMethod {
     fn map(self) -> bool {
         matches!(self, ShadowMethod::Map | ShadowMethod::MapLinear)
     }
+}
+
+/// Baked light-maps for [`Renderer::with_lightmap`]: pages of E/π and, per scene instance, where
+/// its TEXCOORD_1 lands (page coordinates `offset + uv1 · scale`).
+pub struct LightmapInput<'a> {
+    pub pages: &'a [Image],
+    pub rects: &'a [Option<UvRect>],
+    /// Cubic B-spline filtering (four bilinear taps) instead of bilinear.
+    pub bicubic: bool,
+}
+
+/// Upload light-map pages as an Rgba16Float array (filterable everywhere) and a clamping
+/// linear sampler; a black 1×1 layer when there are none.
+fn upload_lightmaps(
+    ctx: &GpuContext,
+    lightmap: Option<&LightmapInput>,
+    size: [u32; 2],
+) -> (wgpu::TextureView, wgpu::Sampler) {
+    // At least two layers: GL decides a texture's target at creation, and makes a one-layer
+    // texture a plain 2D texture that cannot be bound as an array.
+    let pages = lightmap.map_or(0, |lm| lm.pages.len() as u32);
+    let layers = pages.max(2);
+    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("light-maps"),
+        size: wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba16Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let mut data = vec![half::f16::ZERO; (size[0] * size[1] * 4) as usize];
+    for layer in 0..layers {
+        data.fill(half::f16::ZERO);
+        if let Some(lm) = lightmap
+            && layer < pages
+        {
+            let p = &lm.pages[layer as usize];
+            for y in 0..p.height {
+                for x in 0..p.width {
+                    let v = p.get(x, y);
+                    let o = ((y * size[0] + x) * 4) as usize;
+                    for c in 0..3 {
+                        data[o + c] = half::f16::from_f32(v[c].clamp(0.0, 65000.0));
+                    }
+                    data[o + 3] = half::f16::ONE;
+                }
+            }
+        }
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &tex,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&data),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(size[0] * 8),
+                rows_per_image: Some(size[1]),
+            },
+            wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    let view = tex.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("light-map"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    (view, sampler)
 }
 
 /// The constant or environment light of the ambient term (Fuchs's ambient uses the light-map;
@@ -351,7 +440,27 @@ impl Renderer {
         scene: &Scene,
         settings: RasterSettings,
     ) -> Result<Renderer, RasterError> {
+        Self::with_lightmap(ctx, scene, settings, None)
+    }
+
+    /// A renderer whose ambient term is diffuse × light-map (Fuchs §3.4) instead of the SH
+    /// ambient: the `lightmap` and `lightmap+phong` techniques.
+    pub fn with_lightmap(
+        ctx: &GpuContext,
+        scene: &Scene,
+        settings: RasterSettings,
+        lightmap: Option<&LightmapInput>,
+    ) -> Result<Renderer, RasterError> {
         let s = &settings;
+        if let Some(lm) = lightmap
+            && (lm.pages.is_empty()
+                || lm.rects.len() != scene.instances.len()
+                || lm.pages.iter().any(|p| p.width == 0 || p.height == 0))
+        {
+            return Err(RasterError::Settings(
+                "light-maps do not match the scene (one rect per instance, non-empty pages)".into(),
+            ));
+        }
         if s.width == 0 || s.height == 0 || s.width > 16384 || s.height > 16384 {
             return Err(RasterError::Settings(format!(
                 "image size {}×{} must be within 1..=16384",
@@ -377,7 +486,33 @@ impl Renderer {
             .or_else(|| (s.camera == 0).then(|| scene.framing_camera()).flatten())
             .ok_or(RasterError::NoCamera(s.camera))?;
         let device = &ctx.device;
-        let gscene = GpuScene::new(device, &ctx.queue, scene);
+        // Pages may differ in size: the array takes the largest, each page's UVs are scaled.
+        let lm_size = lightmap.map_or([1, 1], |lm| {
+            [
+                lm.pages.iter().map(|p| p.width).max().unwrap_or(1),
+                lm.pages.iter().map(|p| p.height).max().unwrap_or(1),
+            ]
+        });
+        let lm_rects: Option<Vec<Option<UvRect>>> = lightmap.map(|lm| {
+            lm.rects
+                .iter()
+                .map(|r| {
+                    r.map(|r| {
+                        let p = &lm.pages[r.page as usize];
+                        let k = [
+                            p.width as f32 / lm_size[0] as f32,
+                            p.height as f32 / lm_size[1] as f32,
+                        ];
+                        UvRect {
+                            page: r.page,
+                            offset: [r.offset[0] * k[0], r.offset[1] * k[1]],
+                            scale: [r.scale[0] * k[0], r.scale[1] * k[1]],
+                        }
+                    })
+                })
+                .collect()
+        });
+        let gscene = GpuScene::with_lightmap_uvs(device, &ctx.queue, scene, lm_rects.as_deref());
         let aspect = s.width as f32 / s.height as f32;
 
         // Lights and their shadow views.
@@ -475,6 +610,13 @@ impl Renderer {
             normal_offset: s.normal_offset,
             linear_bias: s.linear_bias,
             shadow_size: s.shadow_size as f32,
+            lightmap_mode: match lightmap {
+                None => 0,
+                Some(lm) if lm.bicubic => 2,
+                Some(_) => 1,
+            },
+            _pad_lm: 0,
+            lightmap_size: [lm_size[0] as f32, lm_size[1] as f32],
         };
         let frame_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
@@ -573,6 +715,17 @@ impl Renderer {
                     count: None,
                 },
                 tex_entry(2, unfilt, wgpu::TextureViewDimension::D2Array),
+                tex_entry(
+                    3,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D2Array,
+                ),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
             ],
         });
         let d2 = wgpu::TextureViewDimension::D2;
@@ -725,6 +878,7 @@ impl Renderer {
             ],
         });
         let (sd_view, sl_view) = (array_view(&sd), array_view(&sl));
+        let (lm_view, lm_sampler) = upload_lightmaps(ctx, lightmap, lm_size);
         let group2 = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shadow maps"),
             layout: &bgl2,
@@ -732,6 +886,8 @@ impl Renderer {
                 entry(0, wgpu::BindingResource::TextureView(&sd_view)),
                 entry(1, wgpu::BindingResource::Sampler(&cmp)),
                 entry(2, wgpu::BindingResource::TextureView(&sl_view)),
+                entry(3, wgpu::BindingResource::TextureView(&lm_view)),
+                entry(4, wgpu::BindingResource::Sampler(&lm_sampler)),
             ],
         });
         let group3 = device.create_bind_group(&wgpu::BindGroupDescriptor {

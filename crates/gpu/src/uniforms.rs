@@ -23,6 +23,10 @@ pub struct FrameUniforms {
     pub normal_offset: f32,
     pub linear_bias: f32,
     pub shadow_size: f32,
+    /// 0: ambient from `ambient_sh`; 1: bilinear light-map; 2: bicubic light-map.
+    pub lightmap_mode: u32,
+    pub _pad_lm: u32,
+    pub lightmap_size: [f32; 2],
 }
 
 /// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional.
@@ -114,7 +118,10 @@ mod tests {
                     pcf_radius,
                     normal_offset,
                     linear_bias,
-                    shadow_size
+                    shadow_size,
+                    lightmap_mode,
+                    _pad_lm,
+                    lightmap_size
                 ),
             ),
             (

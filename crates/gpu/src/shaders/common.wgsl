@@ -23,6 +23,11 @@ struct FrameUniforms {
     // Heidrich variant: bias on the normalised linear depth.
     linear_bias: f32,
     shadow_size: f32,
+    // 0: ambient from ambient_sh; 1: bilinear light-map; 2: bicubic light-map.
+    lightmap_mode: u32,
+    _pad_lm: u32,
+    // Light-map page size in texels.
+    lightmap_size: vec2<f32>,
 }
 
 // One light. kind: 0 point, 1 spot, 2 directional. Spot cones as cosines.

@@ -20,6 +20,9 @@
 @group(2) @binding(0) var shadow_depth: texture_depth_2d_array;
 @group(2) @binding(1) var shadow_cmp: sampler_comparison;
 @group(2) @binding(2) var shadow_linear: texture_2d_array<f32>;
+// Light-maps (E/π): one layer per page; UV1 carries the page in its integer part.
+@group(2) @binding(3) var lightmap: texture_2d_array<f32>;
+@group(2) @binding(4) var lightmap_sampler: sampler;
 
 @group(3) @binding(0) var gb_diffuse: texture_2d<f32>;
 @group(3) @binding(1) var gb_normal: texture_2d<f32>;
@@ -133,7 +136,48 @@ fn emission(in: VertexOut) -> vec3<f32> {
     return e;
 }
 
-fn ambient(s: Surface) -> vec3<f32> {
+// Bilinear light-map read at UV1 (page in the integer part of x).
+fn lightmap_bilinear(uv1: vec2<f32>) -> vec3<f32> {
+    let layer = floor(uv1.x);
+    let uv = vec2<f32>(uv1.x - layer, uv1.y);
+    return textureSampleLevel(lightmap, lightmap_sampler, uv, i32(layer), 0.0).rgb;
+}
+
+// Cubic B-spline light-map read from four bilinear taps (the weights of each 2×2 pair folded
+// into one tap's position), as the CPU's `sample_bicubic`.
+fn lightmap_bicubic(uv1: vec2<f32>) -> vec3<f32> {
+    let layer = floor(uv1.x);
+    let size = frame.lightmap_size;
+    let x = vec2<f32>(uv1.x - layer, uv1.y) * size - 0.5;
+    let i = floor(x);
+    let f = x - i;
+    let f2 = f * f;
+    let f3 = f2 * f;
+    let w0 = (1.0 - f) * (1.0 - f) * (1.0 - f) / 6.0;
+    let w1 = (3.0 * f3 - 6.0 * f2 + 4.0) / 6.0;
+    let w2 = (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0) / 6.0;
+    let w3 = f3 / 6.0;
+    let g0 = w0 + w1;
+    let g1 = w2 + w3;
+    // Tap positions in texel units (texel k's centre is at k + 0.5).
+    let h0 = i - 1.0 + w1 / g0 + 0.5;
+    let h1 = i + 1.0 + w3 / g1 + 0.5;
+    let l = i32(layer);
+    let a = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h0.x, h0.y) / size, l, 0.0).rgb;
+    let b = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h1.x, h0.y) / size, l, 0.0).rgb;
+    let c = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h0.x, h1.y) / size, l, 0.0).rgb;
+    let d = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h1.x, h1.y) / size, l, 0.0).rgb;
+    return g0.y * (g0.x * a + g1.x * b) + g1.y * (g0.x * c + g1.x * d);
+}
+
+fn ambient(s: Surface, uv1: vec2<f32>) -> vec3<f32> {
+    // Fuchs §3.4: diffuse × light-map (the light-map holds E/π).
+    if frame.lightmap_mode == 1u {
+        return s.diffuse * max(lightmap_bilinear(uv1), vec3<f32>(0.0));
+    }
+    if frame.lightmap_mode == 2u {
+        return s.diffuse * max(lightmap_bicubic(uv1), vec3<f32>(0.0));
+    }
     let y = sh9(s.n);
     var e = vec3<f32>(0.0);
     for (var k = 0u; k < 9u; k++) {
@@ -231,7 +275,7 @@ fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
 fn ambient_fs(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     alpha_test(in);
     let s = surface(in, front);
-    return vec4<f32>(ambient(s) + emission(in), 1.0);
+    return vec4<f32>(ambient(s, in.uv1) + emission(in), 1.0);
 }
 
 // One light's contribution, blended additively (one pass per light, Fuchs §4.4).
@@ -260,7 +304,7 @@ fn gbuffer_fs(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     alpha_test(in);
     let s = surface(in, front);
     var o: GBufferOut;
-    o.accum = vec4<f32>(ambient(s) + emission(in), 1.0);
+    o.accum = vec4<f32>(ambient(s, in.uv1) + emission(in), 1.0);
     o.diffuse = vec4<f32>(s.diffuse, s.f0d);
     o.normal = vec4<f32>(s.n, s.roughness);
     o.specular = vec4<f32>(s.f0, f32(s.model) + min(s.transmission, 0.99));

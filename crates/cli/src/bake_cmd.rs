@@ -1,0 +1,248 @@
+//! `lightlab bake --method radiosity|path` and the light-map techniques `lightmap` and
+//! `lightmap+phong` of `render` and `demo`.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use lightlab_bake::{BakeSettings, LightMode, Lightmaps, Method, bake_lightmaps, output};
+use lightlab_core::image::Image;
+use lightlab_gpu::GpuContext;
+use lightlab_gpu::gpu_scene::UvRect;
+use lightlab_gpu::raster::{FrameTimes, LightmapInput, Renderer, ShadowMethod};
+use lightlab_scene::Scene;
+use std::path::Path;
+use std::sync::Mutex;
+
+/// The light-map techniques.
+pub const LIGHTMAP_TECHNIQUES: [&str; 2] = ["lightmap", "lightmap+phong"];
+
+/// Options of the light-map bakers.
+#[derive(Args, Clone, Debug)]
+pub struct BakeArgs {
+    /// Light-map texel density (texels per metre). Walls need two texels of thickness for
+    /// bilinear sampling and four for bicubic, or light crosses them.
+    #[arg(long, default_value_t = 16.0)]
+    pub texels_per_metre: f32,
+    /// Path-traced gathering: paths per texel.
+    #[arg(id = "gather_samples", long = "gather-samples", default_value_t = 128)]
+    pub samples: u32,
+    /// Path-traced gathering: largest number of scattering events (1 = direct light only).
+    #[arg(id = "gather_depth", long = "gather-depth", default_value_t = 16)]
+    pub max_depth: u32,
+    /// Radiosity: shooter block size n (n×n patches, CaLight's BlockSize, 1..8).
+    #[arg(long, default_value_t = 3)]
+    pub block_size: u32,
+    /// Radiosity: stop when no patch holds more unshot radiosity than this fraction of the
+    /// largest initial one (CaLight's StopUE, relative).
+    #[arg(long, default_value_t = 1e-4)]
+    pub stop: f64,
+    /// How punctual lights enter the bake: `all=MODE` or `NAME=MODE`, MODE one of baked,
+    /// indirect-only, realtime (comma-separated; default: all baked).
+    #[arg(long, value_delimiter = ',')]
+    pub light_mode: Vec<String>,
+    /// Also write tone-reproduced PNG pages (Ward Larson histogram adjustment, gamma 2).
+    #[arg(long)]
+    pub png: bool,
+    #[arg(long, default_value_t = 0)]
+    pub bake_seed: u64,
+}
+
+impl Default for BakeArgs {
+    fn default() -> Self {
+        BakeArgs {
+            texels_per_metre: 16.0,
+            samples: 128,
+            max_depth: 16,
+            block_size: 3,
+            stop: 1e-4,
+            light_mode: vec![],
+            png: false,
+            bake_seed: 0,
+        }
+    }
+}
+
+impl BakeArgs {
+    /// The library settings for `method` on `scene`.
+    pub fn settings(&self, scene: &Scene, method: Method) -> Result<BakeSettings> {
+        let mut s = BakeSettings {
+            method,
+            seed: self.bake_seed,
+            ..Default::default()
+        };
+        s.layout.texels_per_metre = self.texels_per_metre;
+        s.gather.samples = self.samples;
+        s.gather.max_depth = self.max_depth;
+        s.radiosity.block_size = self.block_size;
+        s.radiosity.stop = self.stop;
+        let mut modes = vec![LightMode::Baked; scene.lights.len()];
+        for item in &self.light_mode {
+            let (name, mode) = item
+                .split_once('=')
+                .with_context(|| format!("--light-mode '{item}' is not NAME=MODE"))?;
+            let mode = LightMode::parse(mode).with_context(|| {
+                format!("unknown light mode '{mode}' (known: baked, indirect-only, realtime)")
+            })?;
+            if name == "all" {
+                modes.iter_mut().for_each(|m| *m = mode);
+            } else {
+                let i = scene
+                    .lights
+                    .iter()
+                    .position(|l| l.name == name)
+                    .with_context(|| {
+                        format!(
+                            "the scene has no light '{name}' (lights: {})",
+                            scene
+                                .lights
+                                .iter()
+                                .map(|l| l.name.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        )
+                    })?;
+                modes[i] = mode;
+            }
+        }
+        s.light_modes = modes;
+        Ok(s)
+    }
+}
+
+/// Bake with a progress bar on stderr.
+pub fn bake_with_progress(scene: &Scene, settings: &BakeSettings) -> Result<Lightmaps> {
+    let bar = ProgressBar::new(1);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix} {msg} [{bar:30}] {pos}/{len}, {elapsed}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(format!("{} {}", scene.name, settings.method.name()));
+    let last = Mutex::new(String::new());
+    let lm = bake_lightmaps(scene, settings, &|stage, done, total| {
+        let mut l = last.lock().expect("progress lock");
+        if *l != stage {
+            *l = stage.to_string();
+            bar.set_message(stage.to_string());
+        }
+        bar.set_length(total.max(done).max(1) as u64);
+        bar.set_position(done as u64);
+        true
+    })?;
+    bar.finish_and_clear();
+    Ok(lm)
+}
+
+/// `lightlab bake --method radiosity|path`.
+pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
+    let Some(m) = Method::parse(method) else {
+        bail!(
+            "unknown bake method '{method}' (known: {}; SH and PRT bakers are planned)",
+            Method::NAMES.join(", ")
+        );
+    };
+    let settings = args.settings(scene, m)?;
+    let lm = bake_with_progress(scene, &settings)?;
+    let manifest = output::write(&lm, out, &scene.name, args.png)?;
+    let st = &lm.stats;
+    eprintln!(
+        "baked {} with {}: {} pages, {} texels ({} valid), {:.2} s; wrote {}",
+        scene.name,
+        m.name(),
+        st.pages,
+        st.texels,
+        st.valid_texels,
+        st.seconds_total,
+        out.display()
+    );
+    if let Some(r) = &st.radiosity {
+        eprintln!(
+            "radiosity: {} shots, unshot energy left {:.3} %{}",
+            r.shots,
+            r.unshot_fraction * 100.0,
+            if r.hit_shot_limit {
+                " (stopped by the shot limit)"
+            } else {
+                ""
+            }
+        );
+    }
+    if json {
+        println!("{}", serde_json::to_string(&manifest.stats)?);
+    }
+    Ok(())
+}
+
+/// The light-maps a technique renders with: read from `baked`, or baked now (all lights baked
+/// for `lightmap`; for `lightmap+phong` punctual lights bake only their indirect light, since
+/// their direct light is drawn in real time).
+pub fn lightmaps_for(
+    scene: &Scene,
+    technique: &str,
+    baked: Option<&Path>,
+    args: &BakeArgs,
+) -> Result<Lightmaps> {
+    if let Some(dir) = baked {
+        return Ok(output::read(dir, scene)?);
+    }
+    let mut settings = args.settings(scene, Method::Path)?;
+    if technique == "lightmap+phong" && args.light_mode.is_empty() {
+        settings.light_modes = vec![LightMode::IndirectOnly; scene.lights.len()];
+    }
+    eprintln!(
+        "no --baked folder: baking {} light-maps now (path, {} texels/m, {} samples)",
+        scene.name, args.texels_per_metre, args.samples
+    );
+    bake_with_progress(scene, &settings)
+}
+
+/// Render a light-map technique on the GPU.
+pub fn render_lightmap(
+    ctx: &GpuContext,
+    lm: &Lightmaps,
+    technique: &str,
+    a: &crate::raster_cmd::RasterArgs,
+    width: u32,
+    height: u32,
+    camera: usize,
+) -> Result<(Image, FrameTimes)> {
+    let base = if technique == "lightmap+phong" {
+        "phong-shadow-volumes"
+    } else {
+        "phong"
+    };
+    let mut s = crate::raster_cmd::settings(base, a, width, height, camera)?;
+    let mut scene = lm.scene.clone();
+    if technique == "lightmap" {
+        scene.lights.clear();
+        s.shadows = ShadowMethod::None;
+    }
+    let rects: Vec<Option<UvRect>> = lm
+        .layout
+        .instances
+        .iter()
+        .map(|r| {
+            r.map(|r| UvRect {
+                page: r.page,
+                offset: r.offset,
+                scale: r.scale,
+            })
+        })
+        .collect();
+    let input = LightmapInput {
+        pages: &lm.pages,
+        rects: &rects,
+        bicubic: a.lightmap_filter == "bicubic",
+    };
+    if !["bilinear", "bicubic"].contains(&a.lightmap_filter.as_str()) {
+        bail!(
+            "--lightmap-filter must be bilinear or bicubic, not '{}'",
+            a.lightmap_filter
+        );
+    }
+    let mut r = Renderer::with_lightmap(ctx, &scene, s, Some(&input))?;
+    r.render(ctx);
+    let times = r.render(ctx);
+    let img = r.read_hdr(ctx)?;
+    Ok((img.downsample(a.ssaa), times))
+}
