@@ -135,6 +135,11 @@ pub fn bake_with_progress(scene: &Scene, settings: &BakeSettings) -> Result<Ligh
 
 /// `lightlab bake --method radiosity|path`.
 pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
+    if ["sh", "shl", "prt", "prt-textured", "prt-hierarchical"].contains(&method) {
+        return Err(crate::not_implemented(format!(
+            "bake method '{method}' (the SH and PRT bakers are planned)"
+        )));
+    }
     let Some(m) = Method::parse(method) else {
         bail!(
             "unknown bake method '{method}' (known: {}; SH and PRT bakers are planned)",

@@ -213,7 +213,7 @@ fn compare_rejects_different_sizes_and_unreadable_files() {
 #[test]
 fn unbuilt_methods_exit_with_code_2() {
     for args in [
-        vec!["bake", "--scene", "cornell", "--method", "radiosity"],
+        vec!["bake", "--scene", "cornell", "--method", "sh"],
         vec!["bench", "bake", "--scene", "cornell"],
         vec!["view", "--scene", "cornell"],
     ] {
@@ -423,4 +423,77 @@ fn gpu_techniques_render_and_bench() {
         assert!(stderr(&o).contains(needle), "{}", stderr(&o));
         assert!(!out.exists());
     }
+}
+
+#[test]
+fn bake_then_render_the_lightmap_techniques() {
+    let dir = tempfile::tempdir().unwrap();
+    let baked = dir.path().join("baked");
+    let o = lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "radiosity",
+        "--out",
+        baked.to_str().unwrap(),
+        "--texels-per-metre",
+        "16",
+        "--png",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["manifest.json", "lightmap-0.exr", "lightmap-0.png"] {
+        assert!(baked.join(f).exists(), "{f}");
+    }
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
+    assert!(v["valid_texels"].as_u64().unwrap() > 100);
+    for (t, filter) in [("lightmap", "bilinear"), ("lightmap+phong", "bicubic")] {
+        let out = dir.path().join(format!("{t}.exr"));
+        let o = lightlab(&[
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            t,
+            "--baked",
+            baked.to_str().unwrap(),
+            "--lightmap-filter",
+            filter,
+            "--width",
+            "48",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{t}: {}", stderr(&o));
+        assert!(out.exists());
+    }
+    // Light-maps of another scene are refused with a clear message.
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "room",
+        "--technique",
+        "lightmap",
+        "--baked",
+        baked.to_str().unwrap(),
+        "-o",
+        dir.path().join("x.exr").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("different scene"), "{}", stderr(&o));
+    // Bad options are errors naming the option.
+    let o = lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "path",
+        "--light-mode",
+        "lamp=baked",
+        "--out",
+        baked.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("no light 'lamp'"), "{}", stderr(&o));
 }
