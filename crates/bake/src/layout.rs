@@ -73,6 +73,41 @@ impl Layout {
     pub fn texel_count(&self) -> u64 {
         self.pages.iter().map(|p| p[0] as u64 * p[1] as u64).sum()
     }
+
+    /// Size of a page in texels.
+    pub fn page_size(&self, page: u32) -> Vec2 {
+        let [w, h] = self.pages[page as usize];
+        Vec2::new(w as f32, h as f32)
+    }
+
+    /// The scene's instances that have a light-map, with their meshes' TEXCOORD_1.
+    pub fn placed<'a>(&'a self, scene: &'a Scene) -> impl Iterator<Item = Placed<'a>> {
+        scene
+            .instances
+            .iter()
+            .enumerate()
+            .filter_map(move |(index, instance)| {
+                let rect = self.instances[index]?;
+                let mesh = &scene.meshes[instance.mesh];
+                let uv1 = mesh.uv1.as_deref()?;
+                Some(Placed {
+                    index,
+                    instance,
+                    mesh,
+                    rect,
+                    uv1,
+                })
+            })
+    }
+}
+
+/// An instance with a light-map ([`Layout::placed`]).
+pub struct Placed<'a> {
+    pub index: usize,
+    pub instance: &'a lightlab_scene::Instance,
+    pub mesh: &'a Mesh,
+    pub rect: InstanceRect,
+    pub uv1: &'a [Vec2],
 }
 
 /// Linear scale of an instance transform (cube root of the volume scale).

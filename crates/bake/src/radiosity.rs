@@ -21,7 +21,8 @@
 //!    `ρ_j·ΔE_j` joins j's unshot radiosity. Receivers within 3 group sizes are shot from the
 //!    group's patches one by one instead (the thesis's future work: "choose n by receiver
 //!    distance"); receivers farther than 3 block sizes share one visibility ray per n×n block
-//!    of their own (hierarchical receivers, which cuts the rays of a shot about n²-fold). The group's unshot radiosity is then zero: absorbed energy leaves the system,
+//!    of their own (hierarchical receivers, which cuts the rays of a shot about n²-fold). The
+//!    group's unshot radiosity is then zero: absorbed energy leaves the system,
 //!    which guarantees progress.
 //! 3. The light-map value is `E/π` (incident irradiance over π): rendered radiance is
 //!    albedo × light-map, as Fuchs's "diffuse texture × light-map".
@@ -292,32 +293,12 @@ pub fn solve(
         surfaces.extend(by_inst.into_values());
     }
     let n = settings.block_size;
-    let block_of = |k: usize| -> Vec<usize> {
-        let p = &patches[k];
-        let page = &texels.pages[p.page];
-        let (bx, by) = (p.x / n * n, p.y / n * n);
-        let mut out = vec![];
-        for y in by..(by + n).min(page.height) {
-            for x in bx..(bx + n).min(page.width) {
-                let j = index[p.page][(y * page.width + x) as usize];
-                if j != u32::MAX {
-                    let q = &patches[j as usize];
-                    if q.instance == p.instance && q.ng.dot(p.ng) > 0.9 {
-                        out.push(j as usize);
-                    }
-                }
-            }
-        }
-        out
-    };
-    let block_value = |k: usize, unshot: &[DVec3]| -> f64 {
-        let b = block_of(k);
-        b.iter().map(|&j| key(unshot[j])).sum::<f64>() / b.len().max(1) as f64
-    };
-    // Receiver blocks: n×n texels of one instance with similar normals.
-    let receivers: Vec<RecvBlock> = {
+    // Blocks: n×n texels of one instance with similar normals. They group shooters (CaLight's
+    // BlockSize) and, for far shooters, receivers.
+    let mut block_id = vec![0u32; np];
+    let blocks: Vec<Block> = {
         let mut map: std::collections::HashMap<(usize, u32, u32, u32), usize> = Default::default();
-        let mut blocks: Vec<RecvBlock> = vec![];
+        let mut blocks: Vec<Block> = vec![];
         for (k, p) in patches.iter().enumerate() {
             let key = (p.page, p.x / n, p.y / n, p.instance);
             let slot = map
@@ -327,7 +308,7 @@ pub fn solve(
             let b = match slot {
                 Some(b) => b,
                 None => {
-                    blocks.push(RecvBlock {
+                    blocks.push(Block {
                         members: vec![],
                         centre: Vec3::ZERO,
                         ng: p.ng,
@@ -337,6 +318,7 @@ pub fn solve(
                     blocks.len() - 1
                 }
             };
+            block_id[k] = b as u32;
             blocks[b].members.push(k as u32);
             blocks[b].centre += p.p;
             blocks[b].area += p.area;
@@ -345,6 +327,11 @@ pub fn solve(
             b.centre /= b.members.len() as f32;
         }
         blocks
+    };
+    let block_of = |k: usize| -> &[u32] { &blocks[block_id[k] as usize].members };
+    let block_value = |k: usize, unshot: &[DVec3]| -> f64 {
+        let b = block_of(k);
+        b.iter().map(|&j| key(unshot[j as usize])).sum::<f64>() / b.len() as f64
     };
     let mut rng = Rng::new(seed, 0x5407);
     let mut shots = 0u64;
@@ -384,27 +371,26 @@ pub fn solve(
             break;
         }
         // Group and shoot.
-        let group = block_of(best.1);
-        let mut power = DVec3::ZERO;
-        let (mut c, mut nrm, mut area) = (DVec3::ZERO, DVec3::ZERO, 0.0f64);
-        for &j in &group {
-            power += unshot[j] * patches[j].area;
-            c += patches[j].p.as_dvec3();
-            nrm += patches[j].n.as_dvec3();
-            area += patches[j].area;
-        }
-        let c = (c / group.len() as f64).as_vec3();
-        let nrm = nrm.normalize_or_zero().as_vec3();
-        let ng = patches[best.1].ng;
+        let group = &blocks[block_id[best.1] as usize];
+        let (c, area) = (group.centre, group.area);
         let members: Vec<(Vec3, Vec3, Vec3, f64, DVec3)> = group
+            .members
             .iter()
             .map(|&j| {
-                let q = &patches[j];
-                (q.p, q.n, q.ng, q.area, unshot[j])
+                let q = &patches[j as usize];
+                (q.p, q.n, q.ng, q.area, unshot[j as usize])
             })
             .collect();
-        for &j in &group {
-            unshot[j] = DVec3::ZERO;
+        let power: DVec3 = members.iter().map(|m| m.4 * m.3).sum();
+        let nrm = members
+            .iter()
+            .map(|m| m.1.as_dvec3())
+            .sum::<DVec3>()
+            .normalize_or_zero()
+            .as_vec3();
+        let ng = patches[best.1].ng;
+        for &j in &group.members {
+            unshot[j as usize] = DVec3::ZERO;
         }
         // Receivers closer than `NEAR` group sizes get the members' own shots (the thesis's
         // future work "choose n by receiver distance"); the rest get the group's.
@@ -426,7 +412,7 @@ pub fn solve(
             };
             (e != DVec3::ZERO).then_some((j, e))
         };
-        let de: Vec<(usize, DVec3)> = receivers
+        let de: Vec<(usize, DVec3)> = blocks
             .par_iter()
             .flat_map_iter(|b| {
                 // Far receiver blocks share one visibility ray (hierarchical receivers).
@@ -469,8 +455,9 @@ pub fn solve(
     Ok((to_pages(texels, &index, &total), stats))
 }
 
-/// A block of receiving patches that far shooters reach with one visibility ray.
-struct RecvBlock {
+/// An n×n block of patches of one instance with similar normals: a shooter group, and for
+/// far shooters a receiver group reached with one visibility ray.
+struct Block {
     members: Vec<u32>,
     centre: Vec3,
     ng: Vec3,

@@ -58,14 +58,9 @@ pub fn find_pairs(scene: &Scene, layout: &Layout) -> Vec<SeamPair> {
     let mut edges: Vec<BEdge> = vec![];
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for (ii, inst) in scene.instances.iter().enumerate() {
-        let Some(rect) = layout.instances[ii] else {
-            continue;
-        };
-        let mesh = &scene.meshes[inst.mesh];
-        let Some(uv1) = &mesh.uv1 else { continue };
-        let [w, h] = layout.pages[rect.page as usize];
-        let size = Vec2::new(w as f32, h as f32);
+    for pl in layout.placed(scene) {
+        let (inst, mesh, rect, uv1) = (pl.instance, pl.mesh, pl.rect, pl.uv1);
+        let size = layout.page_size(rect.page);
         // Count edges by (position, uv) keys: interior chart edges appear twice.
         let key = |i: u32| {
             let p = mesh.positions[i as usize];

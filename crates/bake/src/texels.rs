@@ -81,14 +81,10 @@ pub fn rasterize(scene: &Scene, layout: &Layout) -> Texels {
         .iter()
         .map(|p| vec![Acc::default(); (p[0] * p[1]) as usize])
         .collect();
-    for (ii, inst) in scene.instances.iter().enumerate() {
-        let Some(rect) = layout.instances[ii] else {
-            continue;
-        };
-        let mesh = &scene.meshes[inst.mesh];
-        let Some(uv1) = &mesh.uv1 else { continue };
-        let [w, h] = layout.pages[rect.page as usize];
-        let size = Vec2::new(w as f32, h as f32);
+    for pl in layout.placed(scene) {
+        let (ii, inst, mesh, rect, uv1) = (pl.index, pl.instance, pl.mesh, pl.rect, pl.uv1);
+        let size = layout.page_size(rect.page);
+        let w = size.x as u32;
         let page = &mut acc[rect.page as usize];
         for (ti, t) in mesh.indices.chunks_exact(3).enumerate() {
             let idx = [t[0], t[1], t[2]].map(|i| i as usize);
@@ -177,9 +173,8 @@ fn sample(
     let idx = [mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]].map(|i| i as usize);
     let bw = [1.0 - b.x - b.y, b.x, b.y];
     let rect = layout.instances[ii as usize].expect("rasterised instances have a rect");
-    let [w, h] = layout.pages[rect.page as usize];
     let uv1 = mesh.uv1.as_ref().expect("rasterised meshes have UV1");
-    let q = idx.map(|i| rect.page_uv(uv1[i]) * Vec2::new(w as f32, h as f32));
+    let q = idx.map(|i| rect.page_uv(uv1[i]) * layout.page_size(rect.page));
     let pw = idx.map(|i| inst.transform.transform_point3(mesh.positions[i]));
     let p = pw[0] * bw[0] + pw[1] * bw[1] + pw[2] * bw[2];
     let ng = (pw[1] - pw[0]).cross(pw[2] - pw[0]).normalize_or(Vec3::Y);

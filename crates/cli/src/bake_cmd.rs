@@ -211,6 +211,12 @@ pub fn render_lightmap(
     height: u32,
     camera: usize,
 ) -> Result<(Image, FrameTimes)> {
+    if !["bilinear", "bicubic"].contains(&a.lightmap_filter.as_str()) {
+        bail!(
+            "--lightmap-filter must be bilinear or bicubic, not '{}'",
+            a.lightmap_filter
+        );
+    }
     let base = if technique == "lightmap+phong" {
         "phong-shadow-volumes"
     } else {
@@ -239,12 +245,6 @@ pub fn render_lightmap(
         rects: &rects,
         bicubic: a.lightmap_filter == "bicubic",
     };
-    if !["bilinear", "bicubic"].contains(&a.lightmap_filter.as_str()) {
-        bail!(
-            "--lightmap-filter must be bilinear or bicubic, not '{}'",
-            a.lightmap_filter
-        );
-    }
     let mut r = Renderer::with_lightmap(ctx, &scene, s, Some(&input))?;
     r.render(ctx);
     let times = r.render(ctx);
