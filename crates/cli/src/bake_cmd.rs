@@ -211,6 +211,24 @@ pub fn render_lightmap(
     height: u32,
     camera: usize,
 ) -> Result<(Image, FrameTimes)> {
+    let mut r = lightmap_renderer(ctx, lm, technique, a, width, height, camera)?;
+    r.render(ctx);
+    let times = r.render(ctx);
+    let img = r.read_hdr(ctx)?;
+    Ok((img.downsample(a.ssaa), times))
+}
+
+/// The GPU renderer of a light-map technique (`lightmap`: the light-maps alone;
+/// `lightmap+phong`: light-maps plus the real-time lights with shadow volumes).
+pub fn lightmap_renderer(
+    ctx: &GpuContext,
+    lm: &Lightmaps,
+    technique: &str,
+    a: &crate::raster_cmd::RasterArgs,
+    width: u32,
+    height: u32,
+    camera: usize,
+) -> Result<Renderer> {
     if !["bilinear", "bicubic"].contains(&a.lightmap_filter.as_str()) {
         bail!(
             "--lightmap-filter must be bilinear or bicubic, not '{}'",
@@ -245,9 +263,5 @@ pub fn render_lightmap(
         rects: &rects,
         bicubic: a.lightmap_filter == "bicubic",
     };
-    let mut r = Renderer::with_lightmap(ctx, &scene, s, Some(&input))?;
-    r.render(ctx);
-    let times = r.render(ctx);
-    let img = r.read_hdr(ctx)?;
-    Ok((img.downsample(a.ssaa), times))
+    Ok(Renderer::with_lightmap(ctx, &scene, s, Some(&input))?)
 }

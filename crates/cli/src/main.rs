@@ -108,6 +108,12 @@ enum Command {
         frame: raster_cmd::FrameBenchArgs,
         #[command(flatten)]
         raster: raster_cmd::RasterArgs,
+        #[command(flatten)]
+        bake: bake_cmd::BakeArgs,
+        /// `bench frame` of a light-map technique: read the light-maps from this folder
+        /// (written by `lightlab bake`) instead of baking them first.
+        #[arg(long)]
+        baked: Option<PathBuf>,
     },
     /// Spherical harmonics of environment maps: coefficients and irradiance maps.
     #[command(subcommand)]
@@ -254,11 +260,21 @@ fn run(cli: Cli) -> Result<()> {
             opaque,
             frame,
             raster,
+            bake,
+            baked,
         } => {
             if matches!(what, bench::BenchKind::Frame) {
                 let t = technique.context("bench frame needs --technique")?;
                 let mut s = load_scene(&scene, false)?;
-                return raster_cmd::bench_frame(&mut s, &t, &raster, &frame, json);
+                return raster_cmd::bench_frame(
+                    &mut s,
+                    &t,
+                    &raster,
+                    &frame,
+                    &bake,
+                    baked.as_deref(),
+                    json,
+                );
             }
             bench::run(what, &scene, json, rays, dump, opaque)
         }

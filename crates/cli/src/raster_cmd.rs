@@ -230,12 +230,16 @@ pub fn bench_frame(
     technique: &str,
     a: &RasterArgs,
     f: &FrameBenchArgs,
+    bake: &crate::bake_cmd::BakeArgs,
+    baked: Option<&std::path::Path>,
     json: bool,
 ) -> Result<()> {
+    let lightmapped = crate::bake_cmd::LIGHTMAP_TECHNIQUES.contains(&technique);
     anyhow::ensure!(
-        RASTER_TECHNIQUES.contains(&technique),
-        "bench frame needs a GPU technique ({})",
-        RASTER_TECHNIQUES.join(", ")
+        RASTER_TECHNIQUES.contains(&technique) || lightmapped,
+        "bench frame needs a GPU technique ({}, {})",
+        RASTER_TECHNIQUES.join(", "),
+        crate::bake_cmd::LIGHTMAP_TECHNIQUES.join(", ")
     );
     anyhow::ensure!(
         (1..=10_000).contains(&f.frames),
@@ -260,8 +264,12 @@ pub fn bench_frame(
         scene.lights.truncate(n);
     }
     let ctx = context()?;
-    let s = settings(technique, a, f.width, f.height, 0)?;
-    let mut r = Renderer::new(&ctx, scene, s)?;
+    let mut r = if lightmapped {
+        let lm = crate::bake_cmd::lightmaps_for(scene, technique, baked, bake)?;
+        crate::bake_cmd::lightmap_renderer(&ctx, &lm, technique, a, f.width, f.height, 0)?
+    } else {
+        Renderer::new(&ctx, scene, settings(technique, a, f.width, f.height, 0)?)?
+    };
     r.render(&ctx);
     r.render(&ctx);
     let mut per_pass: std::collections::BTreeMap<&'static str, Vec<f64>> = Default::default();

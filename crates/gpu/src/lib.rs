@@ -29,7 +29,8 @@ pub enum GpuError {
     Device { adapter: String, message: String },
 }
 
-/// A headless wgpu device and queue with the adapter they came from.
+/// A wgpu device and queue with the adapter they came from (headless, or able to present to a
+/// window's surface).
 pub struct GpuContext {
     pub instance: wgpu::Instance,
     pub adapter: wgpu::Adapter,
@@ -53,14 +54,31 @@ impl GpuContext {
     pub fn headless() -> Result<GpuContext, GpuError> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::with_instance(instance, None)
+    }
+
+    /// A context for a window: `instance` made with the window system's display handle (the GL
+    /// backend needs it), and an adapter that can present to `surface`.
+    pub fn windowed(
+        instance: wgpu::Instance,
+        surface: &wgpu::Surface<'_>,
+    ) -> Result<GpuContext, GpuError> {
+        Self::with_instance(instance, Some(surface))
+    }
+
+    fn with_instance(
+        instance: wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<GpuContext, GpuError> {
         let power_preference =
             wgpu::PowerPreference::from_env().unwrap_or(wgpu::PowerPreference::HighPerformance);
         let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(
-            &instance, None,
+            &instance, surface,
         ))
         .or_else(|_| {
             pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
                 power_preference,
+                compatible_surface: surface,
                 ..Default::default()
             }))
         })

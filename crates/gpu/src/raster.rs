@@ -957,6 +957,17 @@ impl Renderer {
     }
 
     /// Number of scene lights rendered.
+    /// The linear HDR colour target of the last frame (Rgba16Float, `width`×`height`), for a
+    /// viewer's own display pass.
+    pub fn hdr_view(&self) -> &wgpu::TextureView {
+        &self.targets.hdr_view
+    }
+
+    /// The camera of the next frame.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
     pub fn light_count(&self) -> usize {
         self.light_pos.len()
     }
