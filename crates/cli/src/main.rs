@@ -9,6 +9,7 @@ mod demo;
 mod raster_cmd;
 mod render;
 mod sh_cmd;
+mod view_cmd;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
@@ -118,11 +119,8 @@ enum Command {
     /// Spherical harmonics of environment maps: coefficients and irradiance maps.
     #[command(subcommand)]
     Sh(sh_cmd::ShCommand),
-    /// Interactive viewer.
-    View {
-        #[arg(long)]
-        scene: String,
-    },
+    /// Interactive viewer: a window with the GPU techniques, an orbit camera and a panel.
+    View(view_cmd::ViewArgs),
 }
 
 /// Tone operator choice on the command line.
@@ -279,11 +277,6 @@ fn run(cli: Cli) -> Result<()> {
             bench::run(what, &scene, json, rays, dump, opaque)
         }
         Command::Sh(cmd) => sh_cmd::run(cmd),
-        Command::View { scene } => {
-            load_scene(&scene, false)?;
-            Err(not_implemented(
-                "the interactive viewer (planned with the GPU renderer)",
-            ))
-        }
+        Command::View(a) => view_cmd::view(&a),
     }
 }

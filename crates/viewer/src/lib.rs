@@ -1,0 +1,634 @@
+//! # lightlab-viewer
+//!
+//! `lightlab view`: a window (winit 0.30) that renders a scene with the GPU techniques of
+//! `lightlab-gpu` continuously, with an orbit camera and an egui panel to switch technique,
+//! set exposure and tone operator, and read the frame's GPU pass times.
+//!
+//! The viewer does not know how a technique name becomes a renderer: the caller passes a
+//! [`MakeRenderer`] (the CLI maps names to settings and bakes or loads light-maps), so
+//! `lightlab render` and the viewer draw the same thing. The window shows the renderer's HDR
+//! target through [`display::Display`], which applies the tone operators of
+//! `lightlab_core::color` exactly as `lightlab render` writes PNGs.
+//!
+//! Controls: left drag orbits around the target, right or middle drag pans, the wheel dollies;
+//! W/A/S/D/Q/E move, Shift moves faster; 1–9 choose a technique, R resets the camera, H hides
+//! the panel, P writes a screenshot (`lightlab-view.png`), Esc quits.
+
+pub mod camera;
+pub mod display;
+
+use camera::OrbitCamera;
+use display::{Display, display_to_rgb8};
+use glam::Vec3;
+use lightlab_core::color::ToneMap;
+use lightlab_gpu::GpuContext;
+use lightlab_gpu::raster::{FrameTimes, Renderer};
+use lightlab_scene::Scene;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+/// Builds the renderer of technique `name` at `width`×`height` (the viewer then sets its
+/// camera). Errors are shown in the panel; the previous renderer stays.
+pub type MakeRenderer<'a> =
+    Box<dyn FnMut(&GpuContext, &str, u32, u32) -> Result<Renderer, String> + 'a>;
+
+/// What the viewer opens.
+pub struct ViewerConfig {
+    pub scene: Scene,
+    /// Technique names offered in the panel.
+    pub techniques: Vec<String>,
+    /// Index into `techniques` of the first one shown.
+    pub technique: usize,
+    /// Scene camera the view starts from.
+    pub camera: usize,
+    pub width: u32,
+    pub height: u32,
+    pub exposure: f32,
+    pub tone: ToneMap,
+    /// Close after this many presented frames (for scripts and tests).
+    pub frames: Option<u64>,
+    /// Where P (and the end of a `frames` run) writes the displayed 3D view as PNG.
+    pub screenshot: PathBuf,
+    /// Write the screenshot when a `frames` run ends.
+    pub screenshot_at_end: bool,
+}
+
+/// Errors of the viewer.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewerError {
+    #[error(
+        "cannot open a window: {0}. The viewer needs a display (X11 or Wayland; DISPLAY or \
+         WAYLAND_DISPLAY); on a headless machine run it under Xvfb (`xvfb-run lightlab view ...`) \
+         or use `lightlab render`"
+    )]
+    Window(String),
+    #[error(transparent)]
+    Gpu(#[from] lightlab_gpu::GpuError),
+    #[error("the window surface failed: {0}")]
+    Surface(String),
+    #[error("technique '{technique}': {message}")]
+    Renderer { technique: String, message: String },
+    #[error("writing the screenshot {path}: {message}")]
+    Screenshot { path: PathBuf, message: String },
+    #[error("the scene has no camera {0}")]
+    NoCamera(usize),
+}
+
+/// What a viewer session did.
+#[derive(Clone, Debug, Default)]
+pub struct ViewerStats {
+    pub frames: u64,
+    pub adapter: String,
+    pub backend: String,
+    /// Mean wall time per presented frame (ms).
+    pub mean_frame_ms: f64,
+    pub screenshots: Vec<PathBuf>,
+}
+
+/// Open the window and run until it is closed (or `frames` frames were shown).
+pub fn run(config: ViewerConfig, make: MakeRenderer<'_>) -> Result<ViewerStats, ViewerError> {
+    let cam = config
+        .scene
+        .cameras
+        .get(config.camera)
+        .ok_or(ViewerError::NoCamera(config.camera))?;
+    let home = OrbitCamera::for_scene(cam, config.scene.bounds());
+    let event_loop = EventLoop::new().map_err(|e| ViewerError::Window(e.to_string()))?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut app = App {
+        technique: config
+            .technique
+            .min(config.techniques.len().saturating_sub(1)),
+        exposure: config.exposure,
+        tone: config.tone,
+        cfg: config,
+        make,
+        gfx: None,
+        orbit: home.clone(),
+        home,
+        rebuild: true,
+        result: Ok(()),
+        message: None,
+        stats: ViewerStats::default(),
+        times: FrameTimes::default(),
+        started: None,
+        last: Instant::now(),
+        frame_ms: 0.0,
+        keys: HashSet::new(),
+        drag: None,
+        cursor: None,
+        show_ui: true,
+        want_screenshot: false,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| ViewerError::Window(e.to_string()))?;
+    app.result?;
+    if app.gfx.is_none() && app.stats.frames == 0 {
+        return Err(ViewerError::Window("no window was created".into()));
+    }
+    if let Some(t0) = app.started
+        && app.stats.frames > 0
+    {
+        app.stats.mean_frame_ms = t0.elapsed().as_secs_f64() * 1e3 / app.stats.frames as f64;
+    }
+    Ok(app.stats)
+}
+
+struct Gfx {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    ctx: GpuContext,
+    display: Display,
+    egui: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+    renderer: Option<Renderer>,
+    pending: egui::TexturesDelta,
+}
+
+impl Drop for Gfx {
+    fn drop(&mut self) {
+        // Updates of a frame that was never drawn are dropped with the window.
+        self.pending.clear();
+    }
+}
+
+struct App<'a> {
+    cfg: ViewerConfig,
+    make: MakeRenderer<'a>,
+    gfx: Option<Gfx>,
+    orbit: OrbitCamera,
+    home: OrbitCamera,
+    technique: usize,
+    exposure: f32,
+    tone: ToneMap,
+    rebuild: bool,
+    result: Result<(), ViewerError>,
+    message: Option<String>,
+    stats: ViewerStats,
+    times: FrameTimes,
+    started: Option<Instant>,
+    last: Instant,
+    frame_ms: f64,
+    keys: HashSet<KeyCode>,
+    drag: Option<MouseButton>,
+    cursor: Option<(f64, f64)>,
+    show_ui: bool,
+    want_screenshot: bool,
+}
+
+impl App<'_> {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: ViewerError) {
+        if self.result.is_ok() {
+            self.result = Err(e);
+        }
+        event_loop.exit();
+    }
+
+    fn create(&mut self, event_loop: &ActiveEventLoop) -> Result<Gfx, ViewerError> {
+        let attrs = Window::default_attributes()
+            .with_title(format!("lightlab view: {}", self.cfg.scene.name))
+            .with_inner_size(PhysicalSize::new(self.cfg.width, self.cfg.height));
+        let window = Arc::new(
+            event_loop
+                .create_window(attrs)
+                .map_err(|e| ViewerError::Window(e.to_string()))?,
+        );
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(event_loop.owned_display_handle()),
+            ));
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| ViewerError::Surface(e.to_string()))?;
+        let ctx = GpuContext::windowed(instance, &surface)?;
+        let caps = surface.get_capabilities(&ctx.adapter);
+        // An sRGB-encoding 8-bit format where offered (the display pass then writes linear
+        // values); otherwise the first, with the transfer function applied in the shader.
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| f.is_srgb() && f.components() == 4)
+            .or_else(|| caps.formats.first().copied())
+            .ok_or_else(|| ViewerError::Surface("the surface offers no format".into()))?;
+        let size = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            color_space: wgpu::SurfaceColorSpace::Auto,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::AutoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes.first().copied().unwrap_or_default(),
+            view_formats: vec![],
+        };
+        surface.configure(&ctx.device, &config);
+        let display = Display::new(&ctx.device, format);
+        let egui_ctx = egui::Context::default();
+        let egui = egui_winit::State::new(
+            egui_ctx,
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(ctx.device.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, Default::default());
+        self.stats.adapter = ctx.info.name.clone();
+        self.stats.backend = format!("{:?}", ctx.info.backend);
+        Ok(Gfx {
+            window,
+            surface,
+            config,
+            ctx,
+            display,
+            egui,
+            egui_renderer,
+            renderer: None,
+            pending: Default::default(),
+        })
+    }
+
+    /// Move the camera by the held keys over `dt` seconds.
+    fn fly(&mut self, dt: f32) {
+        let mut d = Vec3::ZERO;
+        for (k, v) in [
+            (KeyCode::KeyD, Vec3::X),
+            (KeyCode::KeyA, -Vec3::X),
+            (KeyCode::KeyE, Vec3::Y),
+            (KeyCode::KeyQ, -Vec3::Y),
+            (KeyCode::KeyW, Vec3::Z),
+            (KeyCode::KeyS, -Vec3::Z),
+        ] {
+            if self.keys.contains(&k) {
+                d += v;
+            }
+        }
+        if d != Vec3::ZERO {
+            let fast =
+                self.keys.contains(&KeyCode::ShiftLeft) || self.keys.contains(&KeyCode::ShiftRight);
+            let speed = self.orbit.distance * if fast { 2.0 } else { 0.5 };
+            self.orbit.translate(d.normalize() * speed * dt.min(0.1));
+        }
+    }
+
+    fn frame(&mut self, event_loop: &ActiveEventLoop) {
+        let now = Instant::now();
+        let dt = (now - self.last).as_secs_f32();
+        self.last = now;
+        self.fly(dt);
+        let Some(gfx) = self.gfx.as_mut() else {
+            return;
+        };
+        let (w, h) = (gfx.config.width, gfx.config.height);
+        if self.rebuild {
+            self.rebuild = false;
+            let name = self.cfg.techniques[self.technique].clone();
+            match (self.make)(&gfx.ctx, &name, w, h) {
+                Ok(r) => {
+                    gfx.renderer = Some(r);
+                    self.message = None;
+                }
+                Err(message) if gfx.renderer.is_none() => {
+                    self.result = Err(ViewerError::Renderer {
+                        technique: name,
+                        message,
+                    });
+                    event_loop.exit();
+                    return;
+                }
+                Err(message) => self.message = Some(format!("{name}: {message}")),
+            }
+        }
+        let Some(renderer) = gfx.renderer.as_mut() else {
+            return;
+        };
+        renderer.set_camera(&gfx.ctx, self.orbit.camera());
+        self.times = renderer.render(&gfx.ctx);
+        let (rw, rh) = (renderer.settings.width, renderer.settings.height);
+
+        // The panel.
+        let raw = gfx.egui.take_egui_input(&gfx.window);
+        let (mut technique, mut exposure, mut tone) = (self.technique, self.exposure, self.tone);
+        let mut reset = false;
+        let mut shot = false;
+        let info = format!("{} ({:?})", gfx.ctx.info.name, gfx.ctx.info.backend);
+        let show_ui = self.show_ui;
+        let full = gfx.egui.egui_ctx().run_pass(raw, |ctx| {
+            if !show_ui {
+                return;
+            }
+            egui::Window::new("lightlab")
+                .default_pos([10.0, 10.0])
+                .show(ctx, |ui| {
+                    ui.label(format!("{}  ·  {rw}×{rh}", self.cfg.scene.name));
+                    ui.label(&info);
+                    egui::ComboBox::from_label("technique")
+                        .selected_text(&self.cfg.techniques[technique])
+                        .show_ui(ui, |ui| {
+                            for (i, t) in self.cfg.techniques.iter().enumerate() {
+                                ui.selectable_value(&mut technique, i, t);
+                            }
+                        });
+                    ui.add(
+                        egui::Slider::new(&mut exposure, 0.01..=100.0)
+                            .logarithmic(true)
+                            .text("exposure"),
+                    );
+                    ui.horizontal(|ui| {
+                        ui.selectable_value(&mut tone, ToneMap::Filmic, "filmic");
+                        ui.selectable_value(&mut tone, ToneMap::Reinhard, "Reinhard");
+                        ui.selectable_value(&mut tone, ToneMap::Clamp, "clamp");
+                    });
+                    ui.horizontal(|ui| {
+                        reset = ui.button("reset camera (R)").clicked();
+                        shot = ui.button("screenshot (P)").clicked();
+                    });
+                    ui.separator();
+                    ui.label(format!("frame {:.2} ms (wall, smoothed)", self.frame_ms));
+                    if self.times.gpu_ms.is_empty() {
+                        ui.label("no GPU timestamps on this adapter");
+                    } else {
+                        let total: f64 = self.times.gpu_ms.values().sum();
+                        ui.label(format!("GPU {total:.3} ms"));
+                        for (k, v) in &self.times.gpu_ms {
+                            ui.label(format!("  {k}: {v:.3} ms"));
+                        }
+                    }
+                    if self.times.cpu_volumes_ms > 0.0 {
+                        ui.label(format!("CPU volumes {:.3} ms", self.times.cpu_volumes_ms));
+                    }
+                    if let Some(m) = &self.message {
+                        ui.colored_label(egui::Color32::LIGHT_RED, m);
+                    }
+                    ui.separator();
+                    ui.small("drag: orbit · right/middle drag: pan · wheel: dolly");
+                    ui.small("WASD QE: move (Shift: fast) · 1–9 technique · H panel · Esc quit");
+                });
+        });
+        let mut full = full;
+        gfx.egui
+            .handle_platform_output(&gfx.window, std::mem::take(&mut full.platform_output));
+        // Texture updates wait in `pending` until a frame is actually drawn.
+        gfx.pending.append(std::mem::take(&mut full.textures_delta));
+        if technique != self.technique {
+            self.technique = technique;
+            self.rebuild = true;
+        }
+        self.exposure = exposure;
+        self.tone = tone;
+        if reset {
+            self.orbit = self.home.clone();
+        }
+        self.want_screenshot |= shot;
+
+        // Present.
+        let frame = match gfx.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                gfx.surface.configure(&gfx.ctx.device, &gfx.config);
+                gfx.window.request_redraw();
+                return;
+            }
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                gfx.window.request_redraw();
+                return;
+            }
+            other => {
+                let e = ViewerError::Surface(format!("{other:?}"));
+                self.fail(event_loop, e);
+                return;
+            }
+        };
+        let view = frame.texture.create_view(&Default::default());
+        let mut enc = gfx.ctx.device.create_command_encoder(&Default::default());
+        let renderer = gfx.renderer.as_ref().expect("renderer");
+        gfx.display.draw(
+            &gfx.ctx,
+            &mut enc,
+            renderer.hdr_view(),
+            &view,
+            self.exposure,
+            self.tone,
+        );
+        let ppp = full.pixels_per_point;
+        let prims = gfx.egui.egui_ctx().tessellate(full.shapes, ppp);
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [w, h],
+            pixels_per_point: ppp,
+        };
+        for (id, deltas) in gfx.pending.set.drain() {
+            for delta in deltas {
+                gfx.egui_renderer
+                    .update_texture(&gfx.ctx.device, &gfx.ctx.queue, id, &delta);
+            }
+        }
+        let extra = gfx.egui_renderer.update_buffers(
+            &gfx.ctx.device,
+            &gfx.ctx.queue,
+            &mut enc,
+            &prims,
+            &screen,
+        );
+        {
+            let pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("egui"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            gfx.egui_renderer
+                .render(&mut pass.forget_lifetime(), &prims, &screen);
+        }
+        for id in gfx.pending.free.drain() {
+            gfx.egui_renderer.free_texture(&id);
+        }
+        gfx.ctx
+            .queue
+            .submit(extra.into_iter().chain(std::iter::once(enc.finish())));
+        gfx.window.pre_present_notify();
+        gfx.ctx.queue.present(frame);
+
+        self.stats.frames += 1;
+        self.started.get_or_insert(now);
+        self.frame_ms = if self.stats.frames == 1 {
+            dt as f64 * 1e3
+        } else {
+            0.9 * self.frame_ms + 0.1 * dt as f64 * 1e3
+        };
+        let done = self.cfg.frames.is_some_and(|n| self.stats.frames >= n);
+        if self.want_screenshot || (done && self.cfg.screenshot_at_end) {
+            self.want_screenshot = false;
+            let path = self.cfg.screenshot.clone();
+            match screenshot(&gfx.ctx, renderer, &path, self.exposure, self.tone) {
+                Ok(()) => self.stats.screenshots.push(path),
+                Err(message) => {
+                    self.fail(event_loop, ViewerError::Screenshot { path, message });
+                    return;
+                }
+            }
+        }
+        if done {
+            event_loop.exit();
+            return;
+        }
+        gfx.window.request_redraw();
+    }
+}
+
+/// Write the renderer's current frame as the window displays it (without the panel).
+fn screenshot(
+    ctx: &GpuContext,
+    r: &Renderer,
+    path: &Path,
+    exposure: f32,
+    tone: ToneMap,
+) -> Result<(), String> {
+    let (w, h) = (r.settings.width, r.settings.height);
+    let px = display_to_rgb8(ctx, r.hdr_view(), w, h, exposure, tone)?;
+    let bytes: Vec<u8> = px.iter().flatten().copied().collect();
+    lightlab_core::image::write_atomic(path, |f| -> Result<(), lightlab_core::image::ImageError> {
+        use image::ImageEncoder;
+        image::codecs::png::PngEncoder::new(std::io::BufWriter::new(f))
+            .write_image(&bytes, w, h, image::ExtendedColorType::Rgb8)
+            .map_err(|e| lightlab_core::image::ImageError::Encode {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })
+    })
+    .map_err(|e| e.to_string())
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.gfx.is_some() {
+            return;
+        }
+        match self.create(event_loop) {
+            Ok(g) => {
+                g.window.request_redraw();
+                self.gfx = Some(g);
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(gfx) = self.gfx.as_mut() else {
+            return;
+        };
+        let consumed = gfx.egui.on_window_event(&gfx.window, &event).consumed;
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) if size.width > 0 && size.height > 0 => {
+                gfx.config.width = size.width;
+                gfx.config.height = size.height;
+                gfx.surface.configure(&gfx.ctx.device, &gfx.config);
+                self.rebuild = true;
+            }
+            WindowEvent::RedrawRequested => self.frame(event_loop),
+            WindowEvent::KeyboardInput { event, .. } if !consumed => {
+                let PhysicalKey::Code(code) = event.physical_key else {
+                    return;
+                };
+                if event.state == ElementState::Released {
+                    self.keys.remove(&code);
+                    return;
+                }
+                self.keys.insert(code);
+                if event.repeat {
+                    return;
+                }
+                let digit = [
+                    KeyCode::Digit1,
+                    KeyCode::Digit2,
+                    KeyCode::Digit3,
+                    KeyCode::Digit4,
+                    KeyCode::Digit5,
+                    KeyCode::Digit6,
+                    KeyCode::Digit7,
+                    KeyCode::Digit8,
+                    KeyCode::Digit9,
+                ]
+                .iter()
+                .position(|k| *k == code);
+                match code {
+                    KeyCode::Escape => event_loop.exit(),
+                    KeyCode::KeyR => self.orbit = self.home.clone(),
+                    KeyCode::KeyH => self.show_ui = !self.show_ui,
+                    KeyCode::KeyP => self.want_screenshot = true,
+                    _ => {
+                        if let Some(i) = digit
+                            && i < self.cfg.techniques.len()
+                            && i != self.technique
+                        {
+                            self.technique = i;
+                            self.rebuild = true;
+                        }
+                    }
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                if state == ElementState::Pressed && !consumed {
+                    self.drag = Some(button);
+                } else if state == ElementState::Released {
+                    self.drag = None;
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let p = (position.x, position.y);
+                if let (Some(b), Some(last)) = (self.drag, self.cursor) {
+                    let (dx, dy) = ((p.0 - last.0) as f32, (p.1 - last.1) as f32);
+                    if b == MouseButton::Left {
+                        self.orbit.orbit(dx, dy);
+                    } else {
+                        // Pan: one window height of drag moves the view by its height at
+                        // the target's distance.
+                        let s = 2.0 * self.orbit.distance * (self.orbit.yfov * 0.5).tan()
+                            / gfx.config.height as f32;
+                        self.orbit.translate(Vec3::new(-dx * s, dy * s, 0.0));
+                    }
+                }
+                self.cursor = Some(p);
+            }
+            WindowEvent::MouseWheel { delta, .. } if !consumed => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 50.0,
+                };
+                self.orbit.dolly(steps);
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(g) = &self.gfx
+            && !self.keys.is_empty()
+        {
+            g.window.request_redraw();
+        }
+    }
+}
