@@ -145,7 +145,7 @@ pub struct BakeStats {
     pub valid_texels: usize,
     pub charts: u32,
     pub utilization: f32,
-    /// Rays cast by the solver (paths for gathering count every segment as one ray).
+    /// Rays cast during the bake (validity probe and solver), counted by the BVH.
     pub rays: u64,
     pub seconds_layout: f64,
     pub seconds_solve: f64,
@@ -208,7 +208,6 @@ pub fn bake_lightmaps(
         seconds_layout,
         ..Default::default()
     };
-    stats.rays += stats.texels as u64 * settings.validity_rays as u64;
     let t1 = Instant::now();
     let values = match settings.method {
         Method::Path => {
@@ -228,21 +227,14 @@ pub fn bake_lightmaps(
                     },
                 )
                 .collect();
-            let v = gather::gather(
+            gather::gather(
                 &tracer,
                 &texels,
                 &valid,
                 &settings.gather,
                 settings.seed,
                 progress,
-            )?;
-            // Each path: the texel's continuation plus one shadow ray per light per vertex;
-            // counted as (expected depth ≈ 3) × (1 + lights) rays.
-            stats.rays += stats.valid_texels as u64
-                * settings.gather.samples as u64
-                * 3
-                * (2 + scene.lights.len() as u64);
-            v
+            )?
         }
         Method::Radiosity => {
             let (v, rs) = radiosity::solve(
@@ -255,12 +247,12 @@ pub fn bake_lightmaps(
                 settings.seed,
                 progress,
             )?;
-            stats.rays += rs.rays;
             stats.radiosity = Some(rs);
             v
         }
     };
     stats.seconds_solve = t1.elapsed().as_secs_f64();
+    stats.rays = accel.rays_cast();
     // Repair: fill invalid and empty texels, then stitch seams.
     let mut pages: Vec<Image> = vec![];
     let mut filled_masks = vec![];

@@ -6,6 +6,13 @@
 //! DIR/lightmap-K.png       page K tone-reproduced by Ward Larson's histogram adjustment
 //!                          (Fuchs §3.3.5, one histogram over all pages) and gamma 2, as CaLight
 //!                          stored its 8-bit light-maps (optional)
+//! DIR/scene.glb            the scene with light-map UVs for other engines (optional): one mesh
+//!                          per instance whose TEXCOORD_1 is already in page space, the PNG
+//!                          pages embedded as images, and on every light-mapped node
+//!                          `extras.lightmap = {page, texture, exr, uv_rect: [0,0,1,1], quantity}`
+//!                          (the EXR beside the .glb holds the linear values; the embedded PNG
+//!                          is the gamma-2 display version). In Bevy: read the node's
+//!                          `GltfExtras`, load the EXR as the `Lightmap` image, `uv_rect` full.
 //! ```
 //!
 //! Every file is written to a temporary name and renamed, the manifest last, so a folder with
@@ -39,10 +46,22 @@ pub struct Manifest {
     pub pages: Vec<String>,
     /// Tone-reproduced PNG pages, when written.
     pub png_pages: Vec<String>,
+    /// The glTF export with light-map UVs and pages, when written.
+    #[serde(default)]
+    pub gltf: Option<String>,
 }
 
 fn io(path: &Path, e: impl std::fmt::Display) -> BakeError {
     BakeError::Io(format!("{}: {e}", path.display()))
+}
+
+/// What [`write`] writes besides the EXR pages and the manifest.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Outputs {
+    /// Tone-reproduced PNG pages.
+    pub png: bool,
+    /// `scene.glb` with light-map UVs and the PNG pages (implies `png`).
+    pub gltf: bool,
 }
 
 /// Write a bake to `dir` (created if missing).
@@ -50,8 +69,9 @@ pub fn write(
     lm: &Lightmaps,
     dir: &Path,
     scene_name: &str,
-    png: bool,
+    outputs: Outputs,
 ) -> Result<Manifest, BakeError> {
+    let png = outputs.png || outputs.gltf;
     std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let mut pages = vec![];
     for (k, page) in lm.pages.iter().enumerate() {
@@ -100,6 +120,11 @@ pub fn write(
             png_pages.push(name);
         }
     }
+    let gltf = if outputs.gltf {
+        Some(write_gltf(lm, dir, &pages, &png_pages)?)
+    } else {
+        None
+    };
     let manifest = Manifest {
         format: "lightlab-lightmaps".into(),
         version: FORMAT_VERSION,
@@ -112,6 +137,7 @@ pub fn write(
         stats: lm.stats.clone(),
         pages,
         png_pages,
+        gltf,
     };
     let path = dir.join(MANIFEST);
     let json = serde_json::to_string_pretty(&manifest).map_err(|e| io(&path, e))?;
@@ -124,6 +150,67 @@ pub fn write(
     })
     .map_err(|e| io(&path, e))?;
     Ok(manifest)
+}
+
+/// The glTF file of a bake.
+pub const GLTF: &str = "scene.glb";
+
+/// The scene as glTF with page-space TEXCOORD_1 per instance and the PNG pages embedded.
+fn write_gltf(
+    lm: &Lightmaps,
+    dir: &Path,
+    exr_pages: &[String],
+    png_pages: &[String],
+) -> Result<String, BakeError> {
+    use lightlab_scene::gltf_io::{ExportExtras, export_with};
+    let mut scene = lm.scene.clone();
+    let mut meshes = vec![];
+    let mut kept: std::collections::HashMap<usize, usize> = Default::default();
+    let mut extras = ExportExtras::default();
+    let textures = scene.textures.len();
+    for (i, inst) in scene.instances.iter_mut().enumerate() {
+        let rect = lm.layout.instances.get(i).copied().flatten();
+        let mesh = &lm.scene.meshes[inst.mesh];
+        match (rect, &mesh.uv1) {
+            (Some(r), Some(uv1)) => {
+                let mut m = mesh.clone();
+                m.name = format!("{}#{}", mesh.name, inst.name);
+                m.uv1 = Some(uv1.iter().map(|&uv| r.page_uv(uv)).collect());
+                meshes.push(m);
+                inst.mesh = meshes.len() - 1;
+                let k = r.page as usize;
+                extras.instance_extras.push(Some(serde_json::json!({
+                    "lightmap": {
+                        "page": k,
+                        "texture": textures + k,
+                        "exr": exr_pages[k],
+                        "uv_rect": [0.0, 0.0, 1.0, 1.0],
+                        "quantity": "E/pi (linear in the EXR; the embedded PNG is sqrt of Ward Larson's display value)",
+                    }
+                })));
+            }
+            _ => {
+                let j = *kept.entry(inst.mesh).or_insert_with(|| {
+                    meshes.push(mesh.clone());
+                    meshes.len() - 1
+                });
+                inst.mesh = j;
+                extras.instance_extras.push(None);
+            }
+        }
+    }
+    scene.meshes = meshes;
+    for name in png_pages {
+        let p = dir.join(name);
+        let bytes = std::fs::read(&p).map_err(|e| io(&p, e))?;
+        extras.images.push((name.clone(), bytes));
+    }
+    extras.scene_extras = Some(serde_json::json!({
+        "lightmaps": { "pages": exr_pages, "png_pages": png_pages, "manifest": MANIFEST }
+    }));
+    let path = dir.join(GLTF);
+    export_with(&scene, &path, &extras).map_err(|e| io(&path, e))?;
+    Ok(GLTF.to_string())
 }
 
 /// Read a baked folder for `scene`: the scene is given the light-map UVs it was baked with

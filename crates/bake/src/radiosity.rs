@@ -85,7 +85,9 @@ impl Default for RadiositySettings {
 pub struct RadiosityStats {
     pub patches: usize,
     pub shots: u64,
-    pub rays: u64,
+    /// Patch-to-light and patch-to-patch transfers evaluated (each needs a visibility answer,
+    /// some shared by a receiver block); the rays actually cast are `BakeStats::rays`.
+    pub transfers: u64,
     /// Unshot power left over total power emitted and reflected (a measure of convergence).
     pub unshot_fraction: f64,
     /// Whether `max_shots` ended the loop before the threshold was met.
@@ -235,7 +237,7 @@ pub fn solve(
         } else {
             de
         };
-        stats.rays += (np as u64) * n_samples as u64;
+        stats.transfers += (np as u64) * n_samples as u64;
         for k in 0..np {
             if mode == LightMode::Baked {
                 total[k] += de[k];
@@ -264,7 +266,7 @@ pub fn solve(
                 sum * PI / n as f64
             })
             .collect();
-        stats.rays += np as u64 * n as u64;
+        stats.transfers += np as u64 * n as u64;
         for k in 0..np {
             total[k] += de[k];
             unshot[k] += patches[k].rho * de[k];
@@ -438,7 +440,7 @@ pub fn solve(
                     .collect::<Vec<_>>()
             })
             .collect();
-        stats.rays += np as u64;
+        stats.transfers += np as u64;
         for (j, e) in de {
             total[j] += e;
             unshot[j] += patches[j].rho * e;

@@ -280,7 +280,16 @@ fn baked_folder_round_trips_and_rejects_another_scene() {
     let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
     let lm = bake_lightmaps(&scene, &settings(Method::Path, 16.0, 4), &no_progress).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let m = output::write(&lm, dir.path(), "cornell", true).unwrap();
+    let m = output::write(
+        &lm,
+        dir.path(),
+        "cornell",
+        output::Outputs {
+            png: true,
+            gltf: false,
+        },
+    )
+    .unwrap();
     assert_eq!(m.pages.len(), lm.pages.len());
     assert!(dir.path().join("lightmap-0.png").exists());
     let back = output::read(dir.path(), &scene).unwrap();
@@ -341,4 +350,79 @@ fn cancellation_stops_a_bake() {
         &|stage, _, _| !stage.starts_with("radiosity: shooting"),
     );
     assert!(matches!(r, Err(BakeError::Cancelled)));
+}
+
+/// The glTF export carries everything another engine needs: page-space TEXCOORD_1 on one mesh
+/// per instance, the pages as images, and node extras naming page, texture and EXR. Rendering
+/// the re-imported file with identity rects (what an engine that only reads UV1 + an image
+/// does) gives the same picture as the bake.
+#[test]
+fn gltf_export_renders_like_the_bake() {
+    let scene = lightlab_scene::builtin::builtin("room").unwrap();
+    let lm = bake_lightmaps(&scene, &settings(Method::Path, 8.0, 4), &no_progress).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let m = output::write(
+        &lm,
+        dir.path(),
+        "room",
+        output::Outputs {
+            png: false,
+            gltf: true,
+        },
+    )
+    .unwrap();
+    assert_eq!(m.gltf.as_deref(), Some(output::GLTF));
+    let glb = dir.path().join(output::GLTF);
+    let bytes = std::fs::read(&glb).unwrap();
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+    let imported =
+        lightlab_scene::gltf_io::import(&glb, lightlab_scene::LoadOptions::default()).unwrap();
+    assert_eq!(imported.instances.len(), scene.instances.len());
+    let images = doc["images"].as_array().unwrap().len();
+    assert_eq!(images, scene.textures.len() + lm.pages.len());
+    let mut layout = lm.layout.clone();
+    let mut mapped = 0;
+    for (i, rect) in layout.instances.iter_mut().enumerate() {
+        let extras = &doc["nodes"][i]["extras"]["lightmap"];
+        let Some(r) = *rect else {
+            assert!(extras.is_null());
+            continue;
+        };
+        mapped += 1;
+        assert_eq!(extras["page"].as_u64(), Some(r.page as u64), "node {i}");
+        let tex = extras["texture"].as_u64().unwrap() as usize;
+        assert_eq!(tex, scene.textures.len() + r.page as usize);
+        assert!(dir.path().join(extras["exr"].as_str().unwrap()).exists());
+        // The exported UVs are the page UVs of the bake.
+        let ours = &lm.scene.meshes[lm.scene.instances[i].mesh];
+        let theirs = &imported.meshes[imported.instances[i].mesh];
+        for (a, b) in ours
+            .uv1
+            .as_ref()
+            .unwrap()
+            .iter()
+            .zip(theirs.uv1.as_ref().unwrap())
+        {
+            assert!((r.page_uv(*a) - *b).length() < 1e-6);
+        }
+        *rect = Some(layout::InstanceRect {
+            page: r.page,
+            offset: [0.0, 0.0],
+            scale: [1.0, 1.0],
+        });
+    }
+    assert!(mapped >= 5, "{mapped} light-mapped instances");
+    let theirs = Lightmaps {
+        scene: imported,
+        layout,
+        pages: lm.pages.clone(),
+        settings: lm.settings.clone(),
+        stats: lm.stats.clone(),
+    };
+    let a = view::render(&lm, 64, 64, 0, view::Filter::Bilinear, 1).unwrap();
+    let b = view::render(&theirs, 64, 64, 0, view::Filter::Bilinear, 1).unwrap();
+    let e = relmse(&b, &a).unwrap();
+    println!("glTF export vs bake: relMSE {e:.2e}");
+    assert!(e < 1e-6, "relMSE {e}");
 }

@@ -43,6 +43,10 @@ pub struct BakeArgs {
     /// Also write tone-reproduced PNG pages (Ward Larson histogram adjustment, gamma 2).
     #[arg(long)]
     pub png: bool,
+    /// Also write `scene.glb`: the scene with page-space TEXCOORD_1 per instance and the pages
+    /// embedded (as PNG; node extras name the EXR), for other engines. Implies --png.
+    #[arg(long)]
+    pub gltf: bool,
     #[arg(long, default_value_t = 0)]
     pub bake_seed: u64,
 }
@@ -57,6 +61,7 @@ impl Default for BakeArgs {
             stop: 1e-4,
             light_mode: vec![],
             png: false,
+            gltf: false,
             bake_seed: 0,
         }
     }
@@ -148,7 +153,15 @@ pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool)
     };
     let settings = args.settings(scene, m)?;
     let lm = bake_with_progress(scene, &settings)?;
-    let manifest = output::write(&lm, out, &scene.name, args.png)?;
+    let manifest = output::write(
+        &lm,
+        out,
+        &scene.name,
+        output::Outputs {
+            png: args.png,
+            gltf: args.gltf,
+        },
+    )?;
     let st = &lm.stats;
     eprintln!(
         "baked {} with {}: {} pages, {} texels ({} valid), {:.2} s; wrote {}",

@@ -4,8 +4,15 @@
 //! rays over the default camera's image) and incoherent rays (cosine-distributed diffuse
 //! bounces from the primary hit points), on one thread and on all threads. The same ray sets
 //! can be handed to a peer (see `bench/embree_trace.py`) with `--dump-rays`.
+//!
+//! `bench bake` bakes the scene's light-maps with both bakers (radiosity and path-traced
+//! gathering) at the given settings and reports, for each, the wall time by stage, the texels,
+//! the rays cast (counted by the BVH) and rays per second, and the peak resident memory of the
+//! process during that bake (Linux: `VmHWM`, reset through `/proc/self/clear_refs` before
+//! each bake). `bench/bake_vs_cycles.py` runs Blender's Cycles baker on the same scene at the
+//! same texel count and samples per texel and prints the time ratio.
 
-use crate::{load_scene, not_implemented};
+use crate::load_scene;
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use glam::Vec2;
@@ -141,11 +148,7 @@ pub fn run(
     opaque: bool,
 ) -> Result<()> {
     match kind {
-        BenchKind::Bake => {
-            return Err(not_implemented(
-                "bench bake (the light-map bakers are planned)",
-            ));
-        }
+        BenchKind::Bake => anyhow::bail!("bench bake is handled by bench::bench_bake"),
         BenchKind::Frame => anyhow::bail!("bench frame is handled by raster_cmd::bench_frame"),
         BenchKind::Trace => {}
     }
@@ -189,6 +192,94 @@ pub fn run(
                 "threads": all,
                 "coherent_mrays_1t": c1, "coherent_mrays_mt": cn,
                 "incoherent_mrays_1t": i1, "incoherent_mrays_mt": i_n,
+            })
+        );
+    }
+    Ok(())
+}
+
+/// Resident-memory figures of this process in MiB: (current, peak since the last reset).
+/// None where /proc is not available.
+fn memory_mib() -> Option<(f64, f64)> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let field = |name: &str| -> Option<f64> {
+        let line = status.lines().find(|l| l.starts_with(name))?;
+        let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kb / 1024.0)
+    };
+    Some((field("VmRSS:")?, field("VmHWM:")?))
+}
+
+/// Reset the peak-RSS counter (Linux ≥ 4.0); harmless where it is not supported.
+fn reset_peak_memory() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// `lightlab bench bake`: both light-map bakers on one scene.
+pub fn bench_bake(scene: &str, args: &crate::bake_cmd::BakeArgs, json: bool) -> Result<()> {
+    use lightlab_bake::{Method, bake_lightmaps, no_progress};
+    let s = load_scene(scene, false)?;
+    let threads = rayon::current_num_threads();
+    let mut rows = serde_json::Map::new();
+    println!(
+        "bench bake {} at {} texels/m, {} threads",
+        s.name, args.texels_per_metre, threads
+    );
+    println!(
+        "{:<10} {:>9} {:>9} {:>9} {:>10} {:>10} {:>12} {:>10} {:>9}",
+        "baker", "total s", "layout s", "solve s", "texels", "valid", "rays", "Mrays/s", "peak MiB"
+    );
+    for method in [Method::Radiosity, Method::Path] {
+        let settings = args.settings(&s, method)?;
+        reset_peak_memory();
+        let before = memory_mib();
+        let t = Instant::now();
+        let lm = bake_lightmaps(&s, &settings, &no_progress)?;
+        let wall = t.elapsed().as_secs_f64();
+        let after = memory_mib();
+        let st = &lm.stats;
+        let mrays = st.rays as f64 / wall / 1e6;
+        let peak = after.map(|m| m.1);
+        println!(
+            "{:<10} {:>9.2} {:>9.2} {:>9.2} {:>10} {:>10} {:>12} {:>10.2} {:>9}",
+            method.name(),
+            wall,
+            st.seconds_layout,
+            st.seconds_solve,
+            st.page_texels,
+            st.valid_texels,
+            st.rays,
+            mrays,
+            peak.map_or("n/a".to_string(), |p| format!("{p:.0}"))
+        );
+        let mut row = serde_json::json!({
+            "seconds": wall, "seconds_layout": st.seconds_layout,
+            "seconds_solve": st.seconds_solve, "page_texels": st.page_texels,
+            "texels": st.texels, "valid_texels": st.valid_texels, "pages": st.pages,
+            "rays": st.rays, "mrays_per_s": mrays,
+            "rss_before_mib": before.map(|m| m.0), "peak_rss_mib": peak,
+        });
+        match method {
+            Method::Path => {
+                row["samples_per_texel"] = settings.gather.samples.into();
+                row["max_depth"] = settings.gather.max_depth.into();
+            }
+            Method::Radiosity => {
+                if let Some(r) = &st.radiosity {
+                    row["shots"] = r.shots.into();
+                    row["unshot_fraction"] = r.unshot_fraction.into();
+                    row["block_size"] = settings.radiosity.block_size.into();
+                }
+            }
+        }
+        rows.insert(method.name().to_string(), row);
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "scene": s.name, "threads": threads, "texels_per_metre": args.texels_per_metre,
+                "bakers": rows,
             })
         );
     }

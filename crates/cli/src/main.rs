@@ -261,6 +261,9 @@ fn run(cli: Cli) -> Result<()> {
             bake,
             baked,
         } => {
+            if matches!(what, bench::BenchKind::Bake) {
+                return bench::bench_bake(&scene, &bake, json);
+            }
             if matches!(what, bench::BenchKind::Frame) {
                 let t = technique.context("bench frame needs --technique")?;
                 let mut s = load_scene(&scene, false)?;

@@ -214,12 +214,43 @@ fn compare_rejects_different_sizes_and_unreadable_files() {
 fn unbuilt_methods_exit_with_code_2() {
     for args in [
         vec!["bake", "--scene", "cornell", "--method", "sh"],
-        vec!["bench", "bake", "--scene", "cornell"],
+        vec!["bake", "--scene", "cornell", "--method", "prt"],
     ] {
         let o = lightlab(&args);
         assert_eq!(o.status.code(), Some(2), "{args:?}");
         assert!(stderr(&o).contains("not implemented yet"), "{}", stderr(&o));
     }
+}
+
+#[test]
+fn bench_bake_reports_both_bakers() {
+    let o = lightlab(&[
+        "bench",
+        "bake",
+        "--scene",
+        "cornell",
+        "--texels-per-metre",
+        "8",
+        "--gather-samples",
+        "8",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
+    for baker in ["radiosity", "path"] {
+        let b = &v["bakers"][baker];
+        let texels = b["valid_texels"].as_u64().unwrap();
+        assert!(texels > 50, "{baker}: {b}");
+        assert!(b["page_texels"].as_u64().unwrap() >= texels);
+        // Every valid texel casts at least its validity probe (32 rays) and its light rays.
+        assert!(b["rays"].as_u64().unwrap() > 32 * texels, "{baker}: {b}");
+        assert!(b["seconds"].as_f64().unwrap() > 0.0 && b["mrays_per_s"].as_f64().unwrap() > 0.0);
+        if cfg!(target_os = "linux") {
+            assert!(b["peak_rss_mib"].as_f64().unwrap() > 1.0, "{b}");
+        }
+    }
+    assert_eq!(v["bakers"]["path"]["samples_per_texel"], 8);
+    assert!(v["bakers"]["radiosity"]["shots"].as_u64().unwrap() > 0);
 }
 
 #[test]

@@ -441,8 +441,26 @@ impl Importer<'_> {
 // ----------------------------------------------------------------------------------------------
 // Export
 
+/// What a caller adds to an exported document: PNG images (embedded, each with a texture
+/// appended after the scene's own) and `extras` on the instance nodes and the scene. The light-map
+/// exporter of `lightlab-bake` uses it to ship its pages with the meshes.
+#[derive(Clone, Debug, Default)]
+pub struct ExportExtras {
+    /// (name, PNG bytes); texture index = scene texture count + position here.
+    pub images: Vec<(String, Vec<u8>)>,
+    /// `extras` of instance node i (by instance index); None leaves the node without.
+    pub instance_extras: Vec<Option<Value>>,
+    /// `extras` merged into the scene's.
+    pub scene_extras: Option<Value>,
+}
+
 /// Write `scene` as `.glb` or `.gltf` (by extension). See the module documentation.
 pub fn export(scene: &Scene, path: &Path) -> Result<(), SceneError> {
+    export_with(scene, path, &ExportExtras::default())
+}
+
+/// [`export`] with caller-supplied images and extras.
+pub fn export_with(scene: &Scene, path: &Path, extras: &ExportExtras) -> Result<(), SceneError> {
     let ext = lightlab_core::image::extension(path);
     if ext != "glb" && ext != "gltf" {
         return Err(SceneError::Content {
@@ -465,6 +483,7 @@ pub fn export(scene: &Scene, path: &Path) -> Result<(), SceneError> {
         scene,
         scene.environment.as_ref().map(|_| env_uri.as_str()),
         path,
+        extras,
     )?;
     if let Some(env) = &scene.environment {
         env.image
@@ -559,6 +578,7 @@ impl Writer {
         scene: &Scene,
         env_uri: Option<&str>,
         path: &Path,
+        extras: &ExportExtras,
     ) -> Result<Value, SceneError> {
         let mut used: Vec<&str> = vec![];
         let use_ext = |e: &'static str, used: &mut Vec<&str>| {
@@ -601,8 +621,13 @@ impl Writer {
             let view = self.view(&png, None);
             images.push(json!({ "name": t.name, "bufferView": view, "mimeType": "image/png" }));
         }
-        let textures: Vec<Value> = (0..scene.textures.len())
-            .map(|i| json!({ "source": i, "sampler": 0 }))
+        for (name, png) in &extras.images {
+            let view = self.view(png, None);
+            images.push(json!({ "name": name, "bufferView": view, "mimeType": "image/png" }));
+        }
+        // Caller images (light-maps) get sampler 1: bilinear, no mip-maps, clamped.
+        let textures: Vec<Value> = (0..images.len())
+            .map(|i| json!({ "source": i, "sampler": usize::from(i >= scene.textures.len()) }))
             .collect();
         let tinfo = |r: &TextureRef| json!({ "index": r.texture, "texCoord": r.uv_set });
         let mut materials = vec![];
@@ -715,8 +740,12 @@ impl Writer {
             }));
         }
         let mut nodes = vec![];
-        for inst in &scene.instances {
-            nodes.push(json!({ "name": inst.name, "mesh": inst.mesh, "matrix": inst.transform.to_cols_array() }));
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let mut node = json!({ "name": inst.name, "mesh": inst.mesh, "matrix": inst.transform.to_cols_array() });
+            if let Some(Some(e)) = extras.instance_extras.get(i) {
+                node["extras"] = e.clone();
+            }
+            nodes.push(node);
         }
         let mut cameras = vec![];
         for (i, c) in scene.cameras.iter().enumerate() {
@@ -767,6 +796,14 @@ impl Writer {
         if let (Some(uri), Some(env)) = (env_uri, &scene.environment) {
             gscene["extras"] = json!({ "lightlab": { "environment": { "uri": uri, "intensity": env.intensity } } });
         }
+        if let Some(Value::Object(add)) = &extras.scene_extras {
+            if !gscene["extras"].is_object() {
+                gscene["extras"] = json!({});
+            }
+            for (k, v) in add {
+                gscene["extras"][k] = v.clone();
+            }
+        }
         let mut root = json!({
             "asset": { "version": "2.0", "generator": concat!("lightlab ", env!("CARGO_PKG_VERSION")) },
             "scene": 0,
@@ -783,8 +820,10 @@ impl Writer {
         if !images.is_empty() {
             root["images"] = json!(images);
             root["textures"] = json!(textures);
-            root["samplers"] =
-                json!([{ "magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497 }]);
+            root["samplers"] = json!([
+                { "magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497 },
+                { "magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071 }
+            ]);
         }
         if !lights.is_empty() {
             root["extensions"] = json!({ "KHR_lights_punctual": { "lights": lights } });

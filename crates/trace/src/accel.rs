@@ -52,6 +52,38 @@ pub struct Accel {
     textures: Vec<Texture>,
     /// Per-instance normal matrices (inverse transpose of the upper 3×3).
     pub normal_matrices: Vec<Mat3>,
+    rays: RayCounter,
+}
+
+/// Rays cast through an [`Accel`], counted on one cache line per rayon worker so that
+/// counting costs an uncontended atomic add (a few ns against a traversal of hundreds).
+struct RayCounter(Box<[PaddedCount]>);
+
+#[repr(align(128))]
+#[derive(Default)]
+struct PaddedCount(std::sync::atomic::AtomicU64);
+
+impl RayCounter {
+    const SHARDS: usize = 64;
+
+    fn new() -> RayCounter {
+        RayCounter((0..Self::SHARDS).map(|_| PaddedCount::default()).collect())
+    }
+
+    #[inline(always)]
+    fn add(&self) {
+        let i = rayon::current_thread_index().map_or(0, |i| (i + 1) % Self::SHARDS);
+        self.0[i]
+            .0
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    fn total(&self) -> u64 {
+        self.0
+            .iter()
+            .map(|c| c.0.load(std::sync::atomic::Ordering::Relaxed))
+            .sum()
+    }
 }
 
 /// A traversal ray. Negative zeros in the direction are made positive (`−0.0 + 0.0 = +0.0`):
@@ -170,6 +202,7 @@ impl Accel {
             alpha,
             textures: scene.textures.clone(),
             normal_matrices: scene.instances.iter().map(|i| i.normal_matrix()).collect(),
+            rays: RayCounter::new(),
         }
     }
 
@@ -215,6 +248,7 @@ impl Accel {
     /// Closest hit along `origin + t·dir`, t ∈ (0, tmax]. `dir` need not be normalised
     /// (t is in units of `dir`).
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
+        self.rays.add();
         let ray = make_ray(origin, dir, tmax);
         let mut hit = RayHit::none();
         if self
@@ -238,10 +272,16 @@ impl Accel {
 
     /// Whether anything blocks `origin + t·dir` for t ∈ (0, tmax).
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+        self.rays.add();
         let ray = make_ray(origin, dir, tmax);
         !self
             .bvh
             .ray_traverse_miss(ray, |r, slot| self.test(r, slot))
+    }
+
+    /// Rays cast through this structure so far (closest-hit and occlusion queries).
+    pub fn rays_cast(&self) -> u64 {
+        self.rays.total()
     }
 
     /// Closest hits of a batch of rays, across threads.
