@@ -163,6 +163,9 @@ pub struct Lightmaps {
     pub layout: Layout,
     /// One HDR image per page (E/π, linear RGB).
     pub pages: Vec<Image>,
+    /// Directional light-maps: per page, the luminance ratios of the three basis directions
+    /// (see `gather`), when baked with `gather.directional`.
+    pub directional: Option<Vec<Image>>,
     pub settings: BakeSettings,
     pub stats: BakeStats,
 }
@@ -209,6 +212,12 @@ pub fn bake_lightmaps(
         ..Default::default()
     };
     let t1 = Instant::now();
+    if settings.gather.directional && settings.method != Method::Path {
+        return Err(BakeError::Settings(
+            "directional light-maps are gathered by path tracing: use the path method".into(),
+        ));
+    }
+    let mut directional: Option<Vec<Vec<Vec3>>> = None;
     let values = match settings.method {
         Method::Path => {
             let mut tracer = PathTracer::new(&scene, &accel);
@@ -227,14 +236,16 @@ pub fn bake_lightmaps(
                     },
                 )
                 .collect();
-            gather::gather(
+            let (v, d) = gather::gather(
                 &tracer,
                 &texels,
                 &valid,
                 &settings.gather,
                 settings.seed,
                 progress,
-            )?
+            )?;
+            directional = d;
+            v
         }
         Method::Radiosity => {
             let (v, rs) = radiosity::solve(
@@ -256,6 +267,8 @@ pub fn bake_lightmaps(
     // Repair: fill invalid and empty texels, then stitch seams.
     let mut pages: Vec<Image> = vec![];
     let mut filled_masks = vec![];
+    let mut dir_pages: Vec<Image> = vec![];
+    let mut directional = directional.map(|d| d.into_iter());
     for ((page, mut v), valid) in texels.pages.iter().zip(values).zip(valid) {
         let mut ok: Vec<bool> = page
             .samples
@@ -264,6 +277,21 @@ pub fn bake_lightmaps(
             .map(|(s, &ok)| s.is_some() && ok)
             .collect();
         let inside = ok.clone();
+        if let Some(mut d) = directional.as_mut().and_then(|it| it.next()) {
+            let mut ok_d = ok.clone();
+            repair::dilate(&mut d, &mut ok_d, page.width, page.height, 64);
+            // Texels nothing reached stay neutral (ratio 1).
+            for (x, o) in d.iter_mut().zip(&ok_d) {
+                if !o {
+                    *x = Vec3::ONE;
+                }
+            }
+            dir_pages.push(Image {
+                width: page.width,
+                height: page.height,
+                data: d,
+            });
+        }
         repair::dilate(&mut v, &mut ok, page.width, page.height, 64);
         filled_masks.push(inside);
         pages.push(Image {
@@ -283,6 +311,7 @@ pub fn bake_lightmaps(
         scene,
         layout,
         pages,
+        directional: (!dir_pages.is_empty()).then_some(dir_pages),
         settings: settings.clone(),
         stats,
     })

@@ -3,6 +3,7 @@
 //! ```text
 //! DIR/manifest.json        what was baked, with which settings, the layout and the figures
 //! DIR/lightmap-K.exr       page K, linear RGB E/π (32-bit float): the primary output
+//! DIR/directional-K.exr   page K's directional ratios (directional bakes; see `gather`)
 //! DIR/lightmap-K.png       page K tone-reproduced by Ward Larson's histogram adjustment
 //!                          (Fuchs §3.3.5, one histogram over all pages) and gamma 2, as CaLight
 //!                          stored its 8-bit light-maps (optional)
@@ -46,6 +47,9 @@ pub struct Manifest {
     pub pages: Vec<String>,
     /// Tone-reproduced PNG pages, when written.
     pub png_pages: Vec<String>,
+    /// Directional pages (luminance ratios of the three basis directions), when baked.
+    #[serde(default)]
+    pub directional_pages: Vec<String>,
     /// The glTF export with light-map UVs and pages, when written.
     #[serde(default)]
     pub gltf: Option<String>,
@@ -79,6 +83,13 @@ pub fn write(
         page.write(&dir.join(&name), LdrSettings::default())
             .map_err(|e| io(&dir.join(&name), e))?;
         pages.push(name);
+    }
+    let mut directional_pages = vec![];
+    for (k, page) in lm.directional.iter().flatten().enumerate() {
+        let name = format!("directional-{k}.exr");
+        page.write(&dir.join(&name), LdrSettings::default())
+            .map_err(|e| io(&dir.join(&name), e))?;
+        directional_pages.push(name);
     }
     let mut png_pages = vec![];
     if png {
@@ -137,6 +148,7 @@ pub fn write(
         stats: lm.stats.clone(),
         pages,
         png_pages,
+        directional_pages,
         gltf,
     };
     let path = dir.join(MANIFEST);
@@ -259,10 +271,26 @@ pub fn read(dir: &Path, scene: &Scene) -> Result<Lightmaps, BakeError> {
     if pages.len() != layout.pages.len() {
         return Err(io(&path, "lists fewer pages than the layout has"));
     }
+    let mut directional = vec![];
+    for (k, name) in manifest.directional_pages.iter().enumerate() {
+        let p = dir.join(name);
+        let img = Image::read(&p).map_err(|e| io(&p, e))?;
+        if Some(&[img.width, img.height]) != layout.pages.get(k) {
+            return Err(io(&p, "does not match its light-map page's size"));
+        }
+        directional.push(img);
+    }
+    if !directional.is_empty() && directional.len() != pages.len() {
+        return Err(io(
+            &path,
+            "lists a different number of directional pages than pages",
+        ));
+    }
     Ok(Lightmaps {
         scene,
         layout,
         pages,
+        directional: (!directional.is_empty()).then_some(directional),
         settings: manifest.settings,
         stats: manifest.stats,
     })

@@ -278,7 +278,9 @@ fn lightmap_renders_match_the_reference() {
 #[test]
 fn baked_folder_round_trips_and_rejects_another_scene() {
     let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
-    let lm = bake_lightmaps(&scene, &settings(Method::Path, 16.0, 4), &no_progress).unwrap();
+    let mut s = settings(Method::Path, 16.0, 4);
+    s.gather.directional = true;
+    let lm = bake_lightmaps(&scene, &s, &no_progress).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let m = output::write(
         &lm,
@@ -297,6 +299,18 @@ fn baked_folder_round_trips_and_rejects_another_scene() {
     for (a, b) in back.pages.iter().zip(&lm.pages) {
         assert_eq!(a.data, b.data);
     }
+    let (da, db) = (back.directional.unwrap(), lm.directional.clone().unwrap());
+    assert_eq!(da.len(), db.len());
+    for (a, b) in da.iter().zip(&db) {
+        assert_eq!(a.data, b.data);
+    }
+    // Radiosity has no directional output: asking for it is an error, not a silent flat map.
+    let mut r = settings(Method::Radiosity, 16.0, 4);
+    r.gather.directional = true;
+    assert!(matches!(
+        bake_lightmaps(&scene, &r, &no_progress),
+        Err(BakeError::Settings(_))
+    ));
     let other = lightlab_scene::builtin::builtin("room").unwrap();
     assert!(matches!(
         output::read(dir.path(), &other),
@@ -417,6 +431,7 @@ fn gltf_export_renders_like_the_bake() {
         scene: imported,
         layout,
         pages: lm.pages.clone(),
+        directional: None,
         settings: lm.settings.clone(),
         stats: lm.stats.clone(),
     };

@@ -29,6 +29,11 @@ pub struct BakeArgs {
     /// Path-traced gathering: largest number of scattering events (1 = direct light only).
     #[arg(id = "gather_depth", long = "gather-depth", default_value_t = 16)]
     pub max_depth: u32,
+    /// Path-traced gathering: also bake directional light-maps (three-direction basis, a
+    /// third of the samples each: twice the bake time) so normal-mapped surfaces respond to
+    /// baked light.
+    #[arg(long)]
+    pub directional: bool,
     /// Radiosity: shooter block size n (n×n patches, CaLight's BlockSize, 1..8).
     #[arg(long, default_value_t = 3)]
     pub block_size: u32,
@@ -57,6 +62,7 @@ impl Default for BakeArgs {
             texels_per_metre: 16.0,
             samples: 128,
             max_depth: 16,
+            directional: false,
             block_size: 3,
             stop: 1e-4,
             light_mode: vec![],
@@ -78,6 +84,7 @@ impl BakeArgs {
         s.layout.texels_per_metre = self.texels_per_metre;
         s.gather.samples = self.samples;
         s.gather.max_depth = self.max_depth;
+        s.gather.directional = self.directional;
         s.radiosity.block_size = self.block_size;
         s.radiosity.stop = self.stop;
         let mut modes = vec![LightMode::Baked; scene.lights.len()];
@@ -275,6 +282,7 @@ pub fn lightmap_renderer(
         pages: &lm.pages,
         rects: &rects,
         bicubic: a.lightmap_filter == "bicubic",
+        directional: lm.directional.as_deref(),
     };
     Ok(Renderer::with_lightmap(ctx, &scene, s, Some(&input))?)
 }

@@ -111,6 +111,9 @@ pub struct LightmapInput<'a> {
     pub rects: &'a [Option<UvRect>],
     /// Cubic B-spline filtering (four bilinear taps) instead of bilinear.
     pub bicubic: bool,
+    /// Directional light-maps: per page, the luminance ratios of the three basis directions
+    /// (`lightlab_bake::gather`); normal-mapped surfaces then respond to the baked light.
+    pub directional: Option<&'a [Image]>,
 }
 
 /// Upload light-map pages as an Rgba16Float array (filterable everywhere) and a clamping
@@ -123,7 +126,9 @@ fn upload_lightmaps(
     // At least two layers: GL decides a texture's target at creation, and makes a one-layer
     // texture a plain 2D texture that cannot be bound as an array.
     let pages = lightmap.map_or(0, |lm| lm.pages.len() as u32);
-    let layers = pages.max(2);
+    let dir = lightmap.and_then(|lm| lm.directional);
+    // Directional pages follow the E/π pages (layer pages + k).
+    let layers = (pages * if dir.is_some() { 2 } else { 1 }).max(2);
     let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("light-maps"),
         size: wgpu::Extent3d {
@@ -141,10 +146,12 @@ fn upload_lightmaps(
     let mut data = vec![half::f16::ZERO; (size[0] * size[1] * 4) as usize];
     for layer in 0..layers {
         data.fill(half::f16::ZERO);
-        if let Some(lm) = lightmap
-            && layer < pages
-        {
-            let p = &lm.pages[layer as usize];
+        let page = match (lightmap, dir) {
+            (Some(lm), _) if layer < pages => Some(&lm.pages[layer as usize]),
+            (Some(_), Some(d)) if layer < 2 * pages => d.get((layer - pages) as usize),
+            _ => None,
+        };
+        if let Some(p) = page {
             for y in 0..p.height {
                 for x in 0..p.width {
                     let v = p.get(x, y);
@@ -455,7 +462,13 @@ impl Renderer {
         if let Some(lm) = lightmap
             && (lm.pages.is_empty()
                 || lm.rects.len() != scene.instances.len()
-                || lm.pages.iter().any(|p| p.width == 0 || p.height == 0))
+                || lm.pages.iter().any(|p| p.width == 0 || p.height == 0)
+                || lm.directional.is_some_and(|d| {
+                    d.len() != lm.pages.len()
+                        || d.iter()
+                            .zip(lm.pages)
+                            .any(|(a, b)| (a.width, a.height) != (b.width, b.height))
+                }))
         {
             return Err(RasterError::Settings(
                 "light-maps do not match the scene (one rect per instance, non-empty pages)".into(),
@@ -614,8 +627,9 @@ impl Renderer {
                 None => 0,
                 Some(lm) if lm.bicubic => 2,
                 Some(_) => 1,
-            },
-            _pad_lm: 0,
+            } | lightmap
+                .map_or(0, |lm| if lm.directional.is_some() { 4 } else { 0 }),
+            lightmap_pages: lightmap.map_or(0, |lm| lm.pages.len() as u32),
             lightmap_size: [lm_size[0] as f32, lm_size[1] as f32],
         };
         let frame_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -25,7 +25,8 @@ pub struct FrameUniforms {
     pub shadow_size: f32,
     /// 0: ambient from `ambient_sh`; 1: bilinear light-map; 2: bicubic light-map.
     pub lightmap_mode: u32,
-    pub _pad_lm: u32,
+    /// Number of E/π pages: directional page k is layer `lightmap_pages + k`.
+    pub lightmap_pages: u32,
     pub lightmap_size: [f32; 2],
 }
 
@@ -120,7 +121,7 @@ mod tests {
                     linear_bias,
                     shadow_size,
                     lightmap_mode,
-                    _pad_lm,
+                    lightmap_pages,
                     lightmap_size
                 ),
             ),

@@ -42,6 +42,7 @@ fn gpu_lightmap_matches_the_cpu_view() {
             pages: &lm.pages,
             rects: &rects,
             bicubic,
+            directional: None,
         };
         let settings = RasterSettings {
             width: n * k,
@@ -75,6 +76,7 @@ fn gpu_lightmap_matches_the_cpu_view() {
         pages: &lm.pages,
         rects: &rects[..1],
         bicubic: false,
+        directional: None,
     };
     assert!(Renderer::with_lightmap(&ctx, &lit, RasterSettings::default(), Some(&bad)).is_err());
 }

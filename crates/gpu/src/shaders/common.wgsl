@@ -23,9 +23,10 @@ struct FrameUniforms {
     // Heidrich variant: bias on the normalised linear depth.
     linear_bias: f32,
     shadow_size: f32,
-    // 0: ambient from ambient_sh; 1: bilinear light-map; 2: bicubic light-map.
+    // 0: ambient from ambient_sh; 1: bilinear light-map; 2: bicubic light-map; +4: directional.
     lightmap_mode: u32,
-    _pad_lm: u32,
+    // E/π pages; directional page k is layer lightmap_pages + k.
+    lightmap_pages: u32,
     // Light-map page size in texels.
     lightmap_size: vec2<f32>,
 }

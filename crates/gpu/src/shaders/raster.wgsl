@@ -79,6 +79,12 @@ fn alpha_test(in: VertexOut) {
     }
 }
 
+// The interpolated vertex normal, turned to the fragment's side (the normal map's base).
+fn vertex_normal(in: VertexOut, front: bool) -> vec3<f32> {
+    let n = normalize(in.normal);
+    return select(-n, n, front);
+}
+
 // The surface of a rasterised fragment: textures, normal map, normals turned to the viewer.
 fn surface(in: VertexOut, front: bool) -> Surface {
     var s: Surface;
@@ -137,15 +143,15 @@ fn emission(in: VertexOut) -> vec3<f32> {
 }
 
 // Bilinear light-map read at UV1 (page in the integer part of x).
-fn lightmap_bilinear(uv1: vec2<f32>) -> vec3<f32> {
+fn lightmap_bilinear(uv1: vec2<f32>, extra: u32) -> vec3<f32> {
     let layer = floor(uv1.x);
     let uv = vec2<f32>(uv1.x - layer, uv1.y);
-    return textureSampleLevel(lightmap, lightmap_sampler, uv, i32(layer), 0.0).rgb;
+    return textureSampleLevel(lightmap, lightmap_sampler, uv, i32(layer) + i32(extra), 0.0).rgb;
 }
 
 // Cubic B-spline light-map read from four bilinear taps (the weights of each 2×2 pair folded
 // into one tap's position), as the CPU's `sample_bicubic`.
-fn lightmap_bicubic(uv1: vec2<f32>) -> vec3<f32> {
+fn lightmap_bicubic(uv1: vec2<f32>, extra: u32) -> vec3<f32> {
     let layer = floor(uv1.x);
     let size = frame.lightmap_size;
     let x = vec2<f32>(uv1.x - layer, uv1.y) * size - 0.5;
@@ -162,7 +168,7 @@ fn lightmap_bicubic(uv1: vec2<f32>) -> vec3<f32> {
     // Tap positions in texel units (texel k's centre is at k + 0.5).
     let h0 = i - 1.0 + w1 / g0 + 0.5;
     let h1 = i + 1.0 + w3 / g1 + 0.5;
-    let l = i32(layer);
+    let l = i32(layer) + i32(extra);
     let a = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h0.x, h0.y) / size, l, 0.0).rgb;
     let b = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h1.x, h0.y) / size, l, 0.0).rgb;
     let c = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h0.x, h1.y) / size, l, 0.0).rgb;
@@ -170,13 +176,52 @@ fn lightmap_bicubic(uv1: vec2<f32>) -> vec3<f32> {
     return g0.y * (g0.x * a + g1.x * b) + g1.y * (g0.x * c + g1.x * d);
 }
 
-fn ambient(s: Surface, uv1: vec2<f32>) -> vec3<f32> {
-    // Fuchs §3.4: diffuse × light-map (the light-map holds E/π).
-    if frame.lightmap_mode == 1u {
-        return s.diffuse * max(lightmap_bilinear(uv1), vec3<f32>(0.0));
+fn lightmap_read(uv1: vec2<f32>, extra: u32) -> vec3<f32> {
+    if (frame.lightmap_mode & 3u) == 2u {
+        return lightmap_bicubic(uv1, extra);
     }
-    if frame.lightmap_mode == 2u {
-        return s.diffuse * max(lightmap_bicubic(uv1), vec3<f32>(0.0));
+    return lightmap_bilinear(uv1, extra);
+}
+
+// The tangent frame of directional light-maps (lightlab_bake::gather::directional_frame).
+fn directional_frame(n: vec3<f32>) -> mat2x3<f32> {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return mat2x3<f32>(
+        vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        vec3<f32>(b, sign + n.y * n.y * a, -n.y),
+    );
+}
+
+// Weights of the three basis directions (Half-Life 2's radiosity normal mapping basis) for a
+// tangent-space normal, as lightlab_bake::gather::directional_weights.
+fn directional_weights(n: vec3<f32>) -> vec3<f32> {
+    let c = max(vec3<f32>(
+        dot(n, vec3<f32>(-0.4082483, 0.70710677, 0.57735026)),
+        dot(n, vec3<f32>(-0.4082483, -0.70710677, 0.57735026)),
+        dot(n, vec3<f32>(0.8164966, 0.0, 0.57735026)),
+    ), vec3<f32>(0.0));
+    let w = c * c;
+    let t = w.x + w.y + w.z;
+    if t > 0.0 {
+        return w / t;
+    }
+    return vec3<f32>(1.0 / 3.0);
+}
+
+// `nv`: the interpolated vertex normal (before the normal map), turned like s.n.
+fn ambient(s: Surface, uv1: vec2<f32>, nv: vec3<f32>) -> vec3<f32> {
+    // Fuchs §3.4: diffuse × light-map (the light-map holds E/π).
+    if (frame.lightmap_mode & 3u) != 0u {
+        var e = lightmap_read(uv1, 0u);
+        if (frame.lightmap_mode & 4u) != 0u {
+            let r = lightmap_read(uv1, frame.lightmap_pages);
+            let f = directional_frame(nv);
+            let nl = vec3<f32>(dot(s.n, f[0]), dot(s.n, f[1]), dot(s.n, nv));
+            e *= max(dot(directional_weights(nl), r), 0.0);
+        }
+        return s.diffuse * max(e, vec3<f32>(0.0));
     }
     let y = sh9(s.n);
     var e = vec3<f32>(0.0);
@@ -275,7 +320,7 @@ fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
 fn ambient_fs(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     alpha_test(in);
     let s = surface(in, front);
-    return vec4<f32>(ambient(s, in.uv1) + emission(in), 1.0);
+    return vec4<f32>(ambient(s, in.uv1, vertex_normal(in, front)) + emission(in), 1.0);
 }
 
 // One light's contribution, blended additively (one pass per light, Fuchs §4.4).
@@ -304,7 +349,7 @@ fn gbuffer_fs(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     alpha_test(in);
     let s = surface(in, front);
     var o: GBufferOut;
-    o.accum = vec4<f32>(ambient(s, in.uv1) + emission(in), 1.0);
+    o.accum = vec4<f32>(ambient(s, in.uv1, vertex_normal(in, front)) + emission(in), 1.0);
     o.diffuse = vec4<f32>(s.diffuse, s.f0d);
     o.normal = vec4<f32>(s.n, s.roughness);
     o.specular = vec4<f32>(s.f0, f32(s.model) + min(s.transmission, 0.99));
