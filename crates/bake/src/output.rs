@@ -14,6 +14,7 @@
 //!                          (the EXR beside the .glb holds the linear values; the embedded PNG
 //!                          is the gamma-2 display version). In Bevy: read the node's
 //!                          `GltfExtras`, load the EXR as the `Lightmap` image, `uv_rect` full.
+//!                          Directional bakes add `directional_exr` (the ratios page).
 //! ```
 //!
 //! Every file is written to a temporary name and renamed, the manifest last, so a folder with
@@ -132,7 +133,7 @@ pub fn write(
         }
     }
     let gltf = if outputs.gltf {
-        Some(write_gltf(lm, dir, &pages, &png_pages)?)
+        Some(write_gltf(lm, dir, &pages, &png_pages, &directional_pages)?)
     } else {
         None
     };
@@ -173,6 +174,7 @@ fn write_gltf(
     dir: &Path,
     exr_pages: &[String],
     png_pages: &[String],
+    directional_pages: &[String],
 ) -> Result<String, BakeError> {
     use lightlab_scene::gltf_io::{ExportExtras, export_with};
     let mut scene = lm.scene.clone();
@@ -191,7 +193,7 @@ fn write_gltf(
                 meshes.push(m);
                 inst.mesh = meshes.len() - 1;
                 let k = r.page as usize;
-                extras.instance_extras.push(Some(serde_json::json!({
+                let mut e = serde_json::json!({
                     "lightmap": {
                         "page": k,
                         "texture": textures + k,
@@ -199,7 +201,11 @@ fn write_gltf(
                         "uv_rect": [0.0, 0.0, 1.0, 1.0],
                         "quantity": "E/pi (linear in the EXR; the embedded PNG is sqrt of Ward Larson's display value)",
                     }
-                })));
+                });
+                if let Some(d) = directional_pages.get(k) {
+                    e["lightmap"]["directional_exr"] = d.clone().into();
+                }
+                extras.instance_extras.push(Some(e));
             }
             _ => {
                 let j = *kept.entry(inst.mesh).or_insert_with(|| {

@@ -62,12 +62,26 @@ fn gpu_lightmap_matches_the_cpu_view() {
         let gpu = clamp(r.read_hdr(&ctx).unwrap().downsample(k));
         let cpu = clamp(view::render(&lm, n, n, 0, filter, 16).unwrap());
         let e = relmse(&gpu, &cpu).unwrap();
-        let ratio = gpu.mean() / cpu.mean();
-        println!("GPU vs CPU light-map view, {filter:?}: relMSE {e:.5}, mean ratio {ratio:?}");
+        // Means over the light-mapped pixels only. The whole-image means differ by about 1.5 %
+        // because of the emitter's partly covered edge row: the GPU's regular 4×4 samples miss
+        // a sliver that the CPU's jittered samples hit (× radiance 17), an aliasing difference
+        // of the emitter, not of the light-map.
+        let (mut sg, mut sc) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
+        for (g, c) in gpu.data.iter().zip(&cpu.data) {
+            if g.max_element() < 0.9 && c.max_element() < 0.9 {
+                sg += g.as_dvec3();
+                sc += c.as_dvec3();
+            }
+        }
+        let ratio = sg / sc;
+        let whole = gpu.mean() / cpu.mean();
+        println!(
+            "GPU vs CPU light-map view, {filter:?}: relMSE {e:.5}, mean ratio {ratio:?} \
+             (light-mapped pixels), {whole:?} (whole image)"
+        );
         assert!(e < 0.005, "{filter:?}: relMSE {e}");
-        // The GPU image is 1.5–2 % darker on average (open: see docs/lightmaps.md).
         assert!(
-            (ratio - 1.0).abs().max_element() < 0.03,
+            (ratio - 1.0).abs().max_element() < 0.005,
             "{filter:?}: {ratio:?}"
         );
     }
