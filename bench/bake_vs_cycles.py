@@ -8,7 +8,8 @@ same number of texels as lightlab's pages, and bakes Cycles' DIFFUSE pass (direc
 light, no colour: the irradiance a white receiver sees, which is what lightlab stores) on the CPU
 with the same samples per texel, bounce limit and thread count, adaptive sampling and denoising
 off. Only the bake calls are timed on both sides (lightlab's time includes its UV layout, texel
-rasterisation and repair; Blender's UV packing and scene set-up are not counted).
+rasterisation and repair; Blender's UV packing and scene set-up are not counted). Both bakers
+trace only the texels their charts cover, so the time per covered texel is printed too.
 
 Printed: seconds of each baker and the ratio Cycles / lightlab (above 1: lightlab is faster).
 Target (issue 5): lightlab faster than Cycles on the CPU.
@@ -62,7 +63,11 @@ def main():
         "scene": args.scene, "threads": args.threads, "samples_per_texel": args.samples,
         "max_depth": args.depth, "lightlab_texels": texels, "cycles_texels": theirs["texels"],
         "lightlab_path_s": path_s, "lightlab_radiosity_s": rad_s, "cycles_s": theirs["seconds"],
-        "cycles_mean": theirs["mean"],
+        "cycles_mean": theirs["mean"], "cycles_covered_texels": theirs["covered"],
+        "lightlab_valid_texels": ours["bakers"]["path"]["valid_texels"],
+        # Time per covered texel, both sides (the bakers skip texels outside the charts).
+        "ratio_per_texel_path": (theirs["seconds"] / theirs["covered"])
+        / (path_s / ours["bakers"]["path"]["valid_texels"]),
         "ratio_cycles_over_path": theirs["seconds"] / path_s,
         "ratio_cycles_over_radiosity": theirs["seconds"] / rad_s,
         "blender": theirs["blender"],
@@ -72,6 +77,8 @@ def main():
     print(f"  lightlab path gathering {path_s:8.2f} s   Cycles / lightlab = {r['ratio_cycles_over_path']:.2f}x")
     print(f"  lightlab radiosity      {rad_s:8.2f} s   Cycles / lightlab = {r['ratio_cycles_over_radiosity']:.2f}x")
     print(f"  Cycles {theirs['blender']:<17}{theirs['seconds']:8.2f} s")
+    print(f"  covered texels: lightlab {r['lightlab_valid_texels']}, Cycles {theirs['covered']}; "
+          f"per covered texel Cycles / lightlab path = {r['ratio_per_texel_path']:.2f}x")
     if args.json:
         print(json.dumps(r))
 
@@ -118,16 +125,18 @@ def cycles_inner(args):
     c.transmission_bounces = args.depth
     scene.render.threads_mode = "FIXED"
     scene.render.threads = args.threads
-    scene.render.bake.margin = 3
+    # No margin: the covered texels (the ones Cycles actually path-traces) are counted below.
+    scene.render.bake.margin = 0
     bpy.ops.object.select_all(action="DESELECT")
     obj.select_set(True)
     t = time.perf_counter()
-    bpy.ops.object.bake(type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, margin=3)
+    bpy.ops.object.bake(type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, margin=0)
     seconds = time.perf_counter() - t
     px = img.pixels[:]
-    mean = sum(px[i] for i in range(0, len(px), 4)) / (len(px) // 4)
-    print(json.dumps({"seconds": seconds, "texels": side * side, "mean": mean,
-                      "blender": bpy.app.version_string}))
+    covered = [px[i] for i in range(0, len(px), 4) if px[i] + px[i + 1] + px[i + 2] > 0.0]
+    mean = sum(covered) / max(1, len(covered))
+    print(json.dumps({"seconds": seconds, "texels": side * side, "covered": len(covered),
+                      "mean": mean, "blender": bpy.app.version_string}))
 
 
 if __name__ == "__main__":

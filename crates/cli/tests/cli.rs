@@ -526,6 +526,68 @@ fn bake_then_render_the_lightmap_techniques() {
     ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("no light 'lamp'"), "{}", stderr(&o));
+    // Directional bake with the glTF export; the GPU reads the directional pages back.
+    let dirbake = dir.path().join("directional");
+    let o = lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "path",
+        "--gather-samples",
+        "8",
+        "--directional",
+        "--gltf",
+        "--out",
+        dirbake.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["directional-0.exr", "scene.glb", "lightmap-0.png"] {
+        assert!(dirbake.join(f).exists(), "{f}");
+    }
+    let out = dir.path().join("directional.exr");
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "cornell",
+        "--technique",
+        "lightmap",
+        "--baked",
+        dirbake.to_str().unwrap(),
+        "--width",
+        "48",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The exported glTF loads as a scene of its own.
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        dirbake.join("scene.glb").to_str().unwrap(),
+        "--technique",
+        "direct",
+        "--width",
+        "16",
+        "--spp",
+        "1",
+        "-o",
+        dir.path().join("g.exr").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Radiosity cannot bake directional light-maps: a clear error.
+    let o = lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "radiosity",
+        "--directional",
+        "--out",
+        dir.path().join("r").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("path method"), "{}", stderr(&o));
 }
 
 /// The viewer opens a real window (Xvfb in CI), presents frames and shows the same image as
