@@ -13,6 +13,7 @@
 pub mod gather;
 pub mod layout;
 pub mod output;
+pub mod prt;
 pub mod radiosity;
 pub mod repair;
 pub mod seams;

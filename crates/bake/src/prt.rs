@@ -1,0 +1,331 @@
+//! Precomputed radiance transfer: diffuse transfer vectors per vertex and per point (Sloan,
+//! Kautz & Snyder 2002; Fuchs 2005 §5.2–5.4, CaSHL; McKenzie Chapter 2010 ch. 4). Issue 6's
+//! first layer: the techniques, compression and the textured/hierarchical variants build on it.
+//!
+//! **Quantity.** The transfer of a point with normal n is, per SH coefficient i,
+//!
+//! ```text
+//! tᵢ = (1/π) ∫ V(ω) max(n·ω, 0) Yᵢ(ω) dω            (shadowed; V ≡ 1: unshadowed)
+//! ```
+//!
+//! so that under incident radiance L = Σ lᵢ Yᵢ the point receives E/π = Σ lᵢ tᵢ — the same
+//! quantity as a light-map texel (white receiver); the radiance leaving it is albedo × that.
+//! The unshadowed vector is the clamped cosine rotated to n (`sh::clamped_cosine_zonal`,
+//! exact); the others are estimated with `samples` cosine-distributed directions (Hammersley
+//! points with a per-point Cranley–Patterson rotation): tᵢ ≈ (1/N) Σ V(ωₖ) Yᵢ(ωₖ).
+//!
+//! **Inter-reflection** (gathering; Sloan et al. §5's bounce iteration, the gathering
+//! counterpart of CaSHL's shooting): bounce b adds, for the occluded directions that reach a
+//! front face y, (1/N) Σ ρ(y) T⁽ᵇ⁻¹⁾(y), where T⁽ᵇ⁻¹⁾(y) is the previous bounce's increment
+//! interpolated from the vertex transfers of the hit triangle. Transfer at arbitrary points
+//! (light-map texels) gathers from the same per-vertex bounces, so the scene's mesh resolution
+//! bounds the accuracy of inter-reflected light, as in Sloan's per-vertex PRT.
+//!
+//! Determinism: point k draws its rotation from `Rng::new(seed, k)`; the results do not depend
+//! on the thread count.
+
+use crate::texels::albedo;
+use glam::{Vec2, Vec3};
+use lightlab_core::sampling::{Frame, Rng, cosine_hemisphere, hammersley};
+use lightlab_core::sh;
+use lightlab_scene::Scene;
+use lightlab_trace::Accel;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Which transfer to compute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum TransferKind {
+    /// Clamped cosine only (no visibility).
+    Unshadowed,
+    /// Clamped cosine × visibility.
+    Shadowed,
+    /// Shadowed plus this many bounces of diffuse inter-reflection.
+    Interreflected { bounces: u32 },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TransferSettings {
+    /// SH bands (l_max + 1): 4 as Fuchs, 5 as McKenzie Chapter, up to 8.
+    pub bands: usize,
+    /// Directions per point.
+    pub samples: u32,
+    pub kind: TransferKind,
+    pub seed: u64,
+}
+
+impl Default for TransferSettings {
+    fn default() -> Self {
+        TransferSettings {
+            bands: 4,
+            samples: 1024,
+            kind: TransferKind::Shadowed,
+            seed: 0,
+        }
+    }
+}
+
+/// Errors of the transfer computation.
+#[derive(Debug, thiserror::Error)]
+pub enum TransferError {
+    #[error("invalid transfer settings: {0}")]
+    Settings(String),
+}
+
+/// Transfer vectors of every vertex of every instance: `instances[i]` holds the mesh's vertex
+/// count × bands² coefficients (vertex-major).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VertexTransfer {
+    pub bands: usize,
+    pub instances: Vec<Vec<f32>>,
+}
+
+impl VertexTransfer {
+    /// The transfer vector of vertex `v` of instance `i`.
+    pub fn vertex(&self, i: usize, v: usize) -> &[f32] {
+        let n = sh::num_coeffs(self.bands);
+        &self.instances[i][v * n..(v + 1) * n]
+    }
+
+    /// Transfer at a hit: the barycentric blend of its triangle's vertices.
+    fn at_hit(&self, scene: &Scene, instance: usize, triangle: usize, bary: Vec2, out: &mut [f32]) {
+        let mesh = &scene.meshes[scene.instances[instance].mesh];
+        let w = [1.0 - bary.x - bary.y, bary.x, bary.y];
+        out.fill(0.0);
+        for (k, wk) in w.iter().enumerate() {
+            let v = mesh.indices[triangle * 3 + k] as usize;
+            for (o, t) in out.iter_mut().zip(self.vertex(instance, v)) {
+                *o += wk * t;
+            }
+        }
+    }
+}
+
+/// E/π under incident radiance `light` (SH coefficients, RGB) for a transfer vector.
+pub fn shade(transfer: &[f32], light: &[glam::DVec3]) -> Vec3 {
+    transfer
+        .iter()
+        .zip(light)
+        .map(|(t, l)| *l * *t as f64)
+        .sum::<glam::DVec3>()
+        .as_vec3()
+}
+
+fn check(s: &TransferSettings) -> Result<(), TransferError> {
+    if !(1..=8).contains(&s.bands) {
+        return Err(TransferError::Settings(format!(
+            "bands must be 1 to 8, not {}",
+            s.bands
+        )));
+    }
+    if s.samples == 0 && s.kind != TransferKind::Unshadowed {
+        return Err(TransferError::Settings("samples must be at least 1".into()));
+    }
+    Ok(())
+}
+
+fn ray_eps(p: Vec3) -> f32 {
+    2e-5 * (1.0 + p.abs().max_element())
+}
+
+/// Fraction of the way from a vertex to the mean centroid of its triangles where its transfer
+/// is sampled. A vertex on the line where a wall meets a floor would otherwise cast rays along
+/// the other surface's plane, slip past it and see the sky behind it, and its (too bright)
+/// transfer would be interpolated over the whole triangle and gathered by every bounce.
+const VERTEX_INSET: f32 = 0.02;
+
+/// World-space (position, normal) of every vertex, per instance (positions inset towards the
+/// vertex's triangles, see [`VERTEX_INSET`]).
+fn world_vertices(scene: &Scene) -> Vec<Vec<(Vec3, Vec3)>> {
+    scene
+        .instances
+        .iter()
+        .map(|inst| {
+            let m = &scene.meshes[inst.mesh];
+            let nm = inst.normal_matrix();
+            let mut centre = vec![(Vec3::ZERO, 0u32); m.positions.len()];
+            for t in m.indices.chunks_exact(3) {
+                let c = (m.positions[t[0] as usize]
+                    + m.positions[t[1] as usize]
+                    + m.positions[t[2] as usize])
+                    / 3.0;
+                for &v in t {
+                    centre[v as usize].0 += c;
+                    centre[v as usize].1 += 1;
+                }
+            }
+            (0..m.positions.len())
+                .map(|v| {
+                    let (sum, count) = centre[v];
+                    let local = if count > 0 {
+                        m.positions[v].lerp(sum / count as f32, VERTEX_INSET)
+                    } else {
+                        m.positions[v]
+                    };
+                    let p = inst.transform.transform_point3(local);
+                    let n = m
+                        .normals
+                        .get(v)
+                        .map_or(Vec3::Y, |n| (nm * *n).normalize_or(Vec3::Y));
+                    (p, n)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// One bounce (or the direct visibility term when `previous` is None) at a point: the sum over
+/// the point's directions of V·Y (direct) or ρ(y)·T(y) over occluded front-face hits (bounce).
+#[allow(clippy::too_many_arguments)]
+fn gather_point(
+    scene: &Scene,
+    accel: &Accel,
+    p: Vec3,
+    n: Vec3,
+    s: &TransferSettings,
+    point: u64,
+    previous: Option<&VertexTransfer>,
+    out: &mut [f32],
+) {
+    let nc = out.len();
+    let mut y = vec![0.0f32; nc];
+    let mut t = vec![0.0f32; nc];
+    let mut rng = Rng::new(s.seed, point);
+    let rot = rng.next_vec2();
+    let frame = Frame::from_normal(n);
+    let o = p + n * ray_eps(p);
+    out.fill(0.0);
+    for k in 0..s.samples {
+        let u = (hammersley(k, s.samples) + rot).fract_gl();
+        let d = frame.to_world(cosine_hemisphere(u));
+        match previous {
+            None => {
+                if !accel.occluded(o, d, f32::INFINITY) {
+                    sh::eval_f32(s.bands, d.x, d.y, d.z, &mut y);
+                    for (a, b) in out.iter_mut().zip(&y) {
+                        *a += b;
+                    }
+                }
+            }
+            Some(prev) => {
+                let Some(h) = accel.intersect(o, d, f32::INFINITY) else {
+                    continue;
+                };
+                let (ii, tri) = (h.prim.instance as usize, h.prim.triangle as usize);
+                let mesh = &scene.meshes[scene.instances[ii].mesh];
+                let mat = &scene.materials[mesh.material];
+                let w = accel.world_triangle(h.slot);
+                let front = (w[1] - w[0]).cross(w[2] - w[0]).dot(d) < 0.0;
+                if !front && !mat.double_sided {
+                    continue;
+                }
+                let uv0 = if mesh.uv0.len() == mesh.positions.len() {
+                    let b = [1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y];
+                    (0..3)
+                        .map(|j| mesh.uv0[mesh.indices[tri * 3 + j] as usize] * b[j])
+                        .sum()
+                } else {
+                    Vec2::ZERO
+                };
+                // Luminance-free: a scalar transfer carries the albedo's mean (the RGB split is
+                // left to the albedo applied at shading time of the receiver).
+                let rho = albedo(scene, mesh.material, uv0).element_sum() / 3.0;
+                prev.at_hit(scene, ii, tri, h.bary, &mut t);
+                for (a, b) in out.iter_mut().zip(&t) {
+                    *a += rho * b;
+                }
+            }
+        }
+    }
+    let inv = 1.0 / s.samples as f32;
+    out.iter_mut().for_each(|a| *a *= inv);
+}
+
+/// Transfer of arbitrary points (position, normal), e.g. light-map texels. Inter-reflected
+/// transfer needs the scene's per-vertex bounces (`vertex_bounces`).
+pub fn point_transfer(
+    scene: &Scene,
+    accel: &Accel,
+    points: &[(Vec3, Vec3)],
+    s: &TransferSettings,
+    bounces: &[VertexTransfer],
+) -> Result<Vec<f32>, TransferError> {
+    check(s)?;
+    let nc = sh::num_coeffs(s.bands);
+    let zonal = sh::clamped_cosine_zonal(s.bands);
+    let mut out = vec![0.0f32; points.len() * nc];
+    out.par_chunks_mut(nc)
+        .zip(points.par_iter())
+        .enumerate()
+        .for_each(|(k, (o, &(p, n)))| {
+            if s.kind == TransferKind::Unshadowed {
+                let c = sh::zonal_to_axis(&zonal, n.as_dvec3());
+                for (a, b) in o.iter_mut().zip(c) {
+                    *a = (b / std::f64::consts::PI) as f32;
+                }
+                return;
+            }
+            gather_point(scene, accel, p, n, s, k as u64, None, o);
+            let mut add = vec![0.0f32; nc];
+            for prev in bounces {
+                gather_point(scene, accel, p, n, s, k as u64, Some(prev), &mut add);
+                for (a, b) in o.iter_mut().zip(&add) {
+                    *a += b;
+                }
+            }
+        });
+    Ok(out)
+}
+
+/// Per-vertex transfer of the whole scene and, for inter-reflection, what each bounce gathers
+/// from (the direct term, then each bounce's increment): pass that list to [`point_transfer`]
+/// to give points the same number of bounces.
+pub fn vertex_transfer(
+    scene: &Scene,
+    accel: &Accel,
+    s: &TransferSettings,
+) -> Result<(VertexTransfer, Vec<VertexTransfer>), TransferError> {
+    check(s)?;
+    let verts = world_vertices(scene);
+    let flat: Vec<(Vec3, Vec3)> = verts.iter().flatten().copied().collect();
+    let nc = sh::num_coeffs(s.bands);
+    let split = |v: Vec<f32>| -> VertexTransfer {
+        let mut it = v.into_iter();
+        VertexTransfer {
+            bands: s.bands,
+            instances: verts
+                .iter()
+                .map(|vs| it.by_ref().take(vs.len() * nc).collect())
+                .collect(),
+        }
+    };
+    let direct = TransferSettings {
+        kind: if s.kind == TransferKind::Unshadowed {
+            TransferKind::Unshadowed
+        } else {
+            TransferKind::Shadowed
+        },
+        ..*s
+    };
+    let mut total = point_transfer(scene, accel, &flat, &direct, &[])?;
+    let mut increments = vec![];
+    if let TransferKind::Interreflected { bounces } = s.kind {
+        let mut prev = split(total.clone());
+        for _ in 0..bounces {
+            // What this bounce gathers from: the direct term, then each bounce's increment.
+            increments.push(prev.clone());
+            let mut inc = vec![0.0f32; total.len()];
+            inc.par_chunks_mut(nc)
+                .zip(flat.par_iter())
+                .enumerate()
+                .for_each(|(k, (o, &(p, n)))| {
+                    gather_point(scene, accel, p, n, s, k as u64, Some(&prev), o)
+                });
+            for (a, b) in total.iter_mut().zip(&inc) {
+                *a += b;
+            }
+            prev = split(inc);
+        }
+    }
+    Ok((split(total), increments))
+}

@@ -1,0 +1,201 @@
+//! Transfer vectors (issue 6, first layer): the analytic limits and the inter-reflection
+//! against the path tracer's multi-bounce light.
+
+use glam::{DVec3, Mat4, Vec2, Vec3};
+use lightlab_bake::prt::{TransferKind, TransferSettings, point_transfer, shade, vertex_transfer};
+use lightlab_core::image::Image;
+use lightlab_core::sampling::Rng;
+use lightlab_core::sh;
+use lightlab_scene::builtin::geom::aabb_box;
+use lightlab_scene::{Environment, Material, Mesh, Scene};
+use lightlab_trace::{Accel, PathTracer, RenderSettings};
+
+/// An n×n grid of quads from `o` spanning `u` and `v`, facing u × v.
+fn grid(name: &str, o: Vec3, u: Vec3, v: Vec3, n: u32, material: usize) -> Mesh {
+    let normal = u.cross(v).normalize();
+    let mut m = Mesh {
+        name: name.into(),
+        material,
+        ..Default::default()
+    };
+    for j in 0..=n {
+        for i in 0..=n {
+            let (a, b) = (i as f32 / n as f32, j as f32 / n as f32);
+            m.positions.push(o + u * a + v * b);
+            m.normals.push(normal);
+            m.uv0.push(Vec2::new(a, b));
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let k = j * (n + 1) + i;
+            m.indices
+                .extend([k, k + 1, k + n + 2, k, k + n + 2, k + n + 1]);
+        }
+    }
+    m
+}
+
+fn uniform_sky(radiance: f32) -> Environment {
+    Environment {
+        image: Image::from_fn(16, 8, |_, _| Vec3::splat(radiance)),
+        intensity: 1.0,
+    }
+}
+
+/// Uniform radiance 1 in SH: only l₀ = √(4π).
+fn uniform_light(bands: usize) -> Vec<DVec3> {
+    let mut l = vec![DVec3::ZERO; sh::num_coeffs(bands)];
+    l[0] = DVec3::splat((4.0 * std::f64::consts::PI).sqrt());
+    l
+}
+
+#[test]
+fn unoccluded_up_facing_point_is_the_clamped_cosine() {
+    let mut scene = Scene::default();
+    let white = scene.add_material(Material::diffuse("white", Vec3::splat(0.8)));
+    scene.add_mesh(
+        grid(
+            "floor",
+            Vec3::new(-1.0, 0.0, 1.0),
+            Vec3::X * 2.0,
+            -Vec3::Z * 2.0,
+            2,
+            white,
+        ),
+        Mat4::IDENTITY,
+    );
+    let accel = Accel::new(&scene);
+    let pts = [(Vec3::ZERO, Vec3::Y), (Vec3::new(0.3, 0.0, -0.2), Vec3::Y)];
+    for bands in [3, 4, 5, 6] {
+        let exact = TransferSettings {
+            bands,
+            kind: TransferKind::Unshadowed,
+            ..Default::default()
+        };
+        let cosine = point_transfer(&scene, &accel, &pts, &exact, &[]).unwrap();
+        // The clamped cosine about +y: t₀ = Y₀₀ (∫max(cos,0) = π), E/π = 1 under radiance 1.
+        assert!((cosine[0] - 0.282_095).abs() < 1e-5);
+        let e = shade(&cosine[..sh::num_coeffs(bands)], &uniform_light(bands));
+        assert!((e.x - 1.0).abs() < 1e-5, "{e}");
+        let est = TransferSettings {
+            samples: 4096,
+            kind: TransferKind::Shadowed,
+            ..exact
+        };
+        let shadowed = point_transfer(&scene, &accel, &pts, &est, &[]).unwrap();
+        let worst = shadowed
+            .iter()
+            .zip(&cosine)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 5e-3, "{bands} bands: largest difference {worst}");
+    }
+}
+
+#[test]
+fn fully_occluded_point_is_zero() {
+    let mut scene = Scene::default();
+    let white = scene.add_material(Material::diffuse("white", Vec3::splat(0.8)));
+    scene.add_mesh(
+        aabb_box("box", Vec3::splat(-1.0), Vec3::splat(1.0), white),
+        Mat4::IDENTITY,
+    );
+    let accel = Accel::new(&scene);
+    let s = TransferSettings {
+        bands: 5,
+        samples: 256,
+        kind: TransferKind::Shadowed,
+        seed: 1,
+    };
+    let t = point_transfer(&scene, &accel, &[(Vec3::ZERO, Vec3::Y)], &s, &[]).unwrap();
+    assert!(t.iter().all(|x| *x == 0.0), "{t:?}");
+}
+
+/// A 2 m open-top box of albedo 0.7 under a uniform sky: the floor sees the sky through the
+/// opening and the walls' inter-reflected light.
+fn open_box() -> Scene {
+    let mut s = Scene::default();
+    let white = s.add_material(Material::diffuse("white", Vec3::splat(0.7)));
+    let n = 12;
+    let (x, y, z) = (Vec3::X * 2.0, Vec3::Y * 1.2, Vec3::Z * 2.0);
+    let o = Vec3::new(-1.0, 0.0, -1.0);
+    for m in [
+        grid("floor", o, z, x, n, white),
+        grid("west", o, y, z, n, white),
+        grid("east", o + x, z, y, n, white),
+        grid("north", o, x, y, n, white),
+        grid("south", o + z, y, x, n, white),
+    ] {
+        s.add_mesh(m, Mat4::IDENTITY);
+    }
+    s.environment = Some(uniform_sky(1.0));
+    s
+}
+
+#[test]
+fn interreflection_approaches_the_multi_bounce_reference() {
+    let scene = open_box();
+    let accel = Accel::new(&scene);
+    let bands = 4;
+    let light = uniform_light(bands);
+    let nc = sh::num_coeffs(bands);
+    // Floor points between vertices.
+    let pts: Vec<(Vec3, Vec3)> = (0..5)
+        .flat_map(|i| (0..5).map(move |j| (i, j)))
+        .map(|(i, j)| {
+            (
+                Vec3::new(-0.83 + 0.41 * i as f32, 0.0, -0.79 + 0.4 * j as f32),
+                Vec3::Y,
+            )
+        })
+        .collect();
+    let mean = |t: &[f32]| -> f64 {
+        t.chunks(nc).map(|c| shade(c, &light).x as f64).sum::<f64>() / pts.len() as f64
+    };
+    let shadowed_s = TransferSettings {
+        bands,
+        samples: 512,
+        kind: TransferKind::Shadowed,
+        seed: 3,
+    };
+    let shadowed = mean(&point_transfer(&scene, &accel, &pts, &shadowed_s, &[]).unwrap());
+    let inter_s = TransferSettings {
+        kind: TransferKind::Interreflected { bounces: 3 },
+        ..shadowed_s
+    };
+    let (_, sources) = vertex_transfer(&scene, &accel, &inter_s).unwrap();
+    assert_eq!(sources.len(), 3);
+    let inter = mean(&point_transfer(&scene, &accel, &pts, &inter_s, &sources).unwrap());
+    // The reference tracer's E/π at the same points: 1 scattering event (sky only) and 4.
+    let tracer = PathTracer::new(&scene, &accel);
+    let reference = |depth: u32| -> f64 {
+        let rs = RenderSettings {
+            max_depth: depth,
+            min_depth: 0,
+            ..Default::default()
+        };
+        let mut sum = 0.0;
+        for (k, &(p, n)) in pts.iter().enumerate() {
+            let mut rng = Rng::new(11, k as u64);
+            for _ in 0..2048 {
+                sum += tracer.surface_radiance(p, n, n, Vec3::ONE, &rs, &mut rng).x as f64;
+            }
+        }
+        sum / (2048.0 * pts.len() as f64)
+    };
+    let (ref1, ref4) = (reference(1), reference(4));
+    println!(
+        "floor E/π: shadowed {shadowed:.4} (tracer, sky only {ref1:.4}); \
+         inter-reflected 3 bounces {inter:.4} (tracer, depth 4 {ref4:.4})"
+    );
+    assert!((shadowed / ref1 - 1.0).abs() < 0.02, "{shadowed} vs {ref1}");
+    assert!((inter / ref4 - 1.0).abs() < 0.03, "{inter} vs {ref4}");
+    assert!((inter - ref4).abs() < 0.25 * (shadowed - ref4).abs());
+    // Bad settings are errors.
+    let bad = TransferSettings {
+        bands: 9,
+        ..shadowed_s
+    };
+    assert!(point_transfer(&scene, &accel, &pts, &bad, &[]).is_err());
+}
