@@ -329,3 +329,148 @@ pub fn vertex_transfer(
     }
     Ok((split(total), increments))
 }
+
+/// Transfer per light-map texel (Fuchs §5's SH light-maps, the texels of CaSHL): the scene's
+/// light-map layout, and per page the coefficients packed three to an RGB image
+/// (`ceil(bands²/3)` images per page, coefficient c in image c/3, channel c%3).
+#[derive(Clone, Debug)]
+pub struct ShLightmaps {
+    /// The scene with its light-map UVs.
+    pub scene: Scene,
+    pub layout: crate::layout::Layout,
+    pub bands: usize,
+    pub pages: Vec<Vec<lightlab_core::image::Image>>,
+    pub settings: TransferSettings,
+}
+
+impl ShLightmaps {
+    /// The transfer vector at page coordinates `uv` of `page`, bilinearly filtered.
+    pub fn sample(&self, page: u32, uv: Vec2, out: &mut [f32]) {
+        for (k, img) in self.pages[page as usize].iter().enumerate() {
+            let v = crate::sample_bilinear(img, uv);
+            for c in 0..3 {
+                if let Some(o) = out.get_mut(3 * k + c) {
+                    *o = v[c];
+                }
+            }
+        }
+    }
+}
+
+/// Bake SH light-maps: unwrap, rasterise texels, probe validity, compute every valid texel's
+/// transfer (inter-reflection through per-vertex bounces), dilate each coefficient image.
+pub fn bake_sh_lightmaps(
+    scene: &Scene,
+    layout: &crate::layout::LayoutSettings,
+    s: &TransferSettings,
+) -> Result<ShLightmaps, crate::BakeError> {
+    check(s).map_err(|e| crate::BakeError::Settings(e.to_string()))?;
+    let mut scene = scene.clone();
+    let layout = crate::layout::unwrap_scene(&mut scene, layout)?;
+    let texels = crate::texels::rasterize(&scene, &layout);
+    let accel = Accel::new(&scene);
+    let valid = crate::texels::probe_validity(&texels, &scene, &accel, 32, 0.25, s.seed);
+    let sources = if matches!(s.kind, TransferKind::Interreflected { .. }) {
+        vertex_transfer(&scene, &accel, s)
+            .map_err(|e| crate::BakeError::Settings(e.to_string()))?
+            .1
+    } else {
+        vec![]
+    };
+    let nc = sh::num_coeffs(s.bands);
+    let images = nc.div_ceil(3);
+    let mut pages = vec![];
+    for (page, ok) in texels.pages.iter().zip(&valid) {
+        let idx: Vec<usize> = (0..page.samples.len())
+            .filter(|&i| page.samples[i].is_some() && ok[i])
+            .collect();
+        let pts: Vec<(Vec3, Vec3)> = idx
+            .iter()
+            .map(|&i| {
+                let t = page.samples[i].as_ref().expect("filtered");
+                (t.p + t.ng * ray_eps(t.p), t.ns)
+            })
+            .collect();
+        let tr = point_transfer(&scene, &accel, &pts, s, &sources)
+            .map_err(|e| crate::BakeError::Settings(e.to_string()))?;
+        let n = page.samples.len();
+        let mut imgs = vec![];
+        for k in 0..images {
+            let mut v = vec![Vec3::ZERO; n];
+            let mut filled = vec![false; n];
+            for (j, &i) in idx.iter().enumerate() {
+                let c = &tr[j * nc..(j + 1) * nc];
+                v[i] =
+                    Vec3::from_array([0, 1, 2].map(|ch| c.get(3 * k + ch).copied().unwrap_or(0.0)));
+                filled[i] = true;
+            }
+            crate::repair::dilate(&mut v, &mut filled, page.width, page.height, 64);
+            imgs.push(lightlab_core::image::Image {
+                width: page.width,
+                height: page.height,
+                data: v,
+            });
+        }
+        pages.push(imgs);
+    }
+    Ok(ShLightmaps {
+        scene,
+        layout,
+        bands: s.bands,
+        pages,
+        settings: *s,
+    })
+}
+
+/// Render SH light-maps on the CPU under incident radiance `light` (SH, RGB; e.g. the scene's
+/// environment projected): radiance = albedo × Σ lᵢ tᵢ (+ emission), the environment where
+/// rays escape. The reference view of the `shl` techniques.
+pub fn render_sh_lightmaps(
+    sl: &ShLightmaps,
+    light: &[glam::DVec3],
+    width: u32,
+    height: u32,
+    camera: usize,
+    spp: u32,
+) -> Option<lightlab_core::image::Image> {
+    let scene = &sl.scene;
+    let cam = scene.cameras.get(camera)?;
+    let accel = Accel::new(scene);
+    let aspect = width as f32 / height as f32;
+    let nc = sh::num_coeffs(sl.bands);
+    let data = (0..width * height)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let mut rng = Rng::new(7, i as u64);
+            let mut t = vec![0.0f32; nc];
+            let mut sum = Vec3::ZERO;
+            for _ in 0..spp.max(1) {
+                let j = if spp > 1 {
+                    rng.next_vec2()
+                } else {
+                    Vec2::splat(0.5)
+                };
+                let ndc = Vec2::new(
+                    (x as f32 + j.x) / width as f32 * 2.0 - 1.0,
+                    1.0 - (y as f32 + j.y) / height as f32 * 2.0,
+                );
+                let d = cam.ray_direction(ndc, aspect);
+                let hit = crate::view::layout_hit(scene, &sl.layout, &accel, cam.position(), d);
+                if let Some(h) = hit {
+                    sl.sample(h.page, h.uv, &mut t);
+                    let e = shade(&t, light).max(Vec3::ZERO);
+                    sum += albedo(scene, h.material, h.uv0) * e;
+                } else if let Some(env) = &scene.environment {
+                    sum += env.radiance(d);
+                }
+            }
+            sum / spp.max(1) as f32
+        })
+        .collect();
+    Some(lightlab_core::image::Image {
+        width,
+        height,
+        data,
+    })
+}

@@ -42,11 +42,21 @@ pub struct LightmapHit {
 
 /// Trace a ray and return where it lands in the light-maps.
 pub fn lightmap_hit(lm: &Lightmaps, accel: &Accel, o: Vec3, d: Vec3) -> Option<LightmapHit> {
+    layout_hit(&lm.scene, &lm.layout, accel, o, d)
+}
+
+/// [`lightmap_hit`] for any data laid out by `layout` (light-maps, SH light-maps).
+pub fn layout_hit(
+    scene: &lightlab_scene::Scene,
+    layout: &crate::layout::Layout,
+    accel: &Accel,
+    o: Vec3,
+    d: Vec3,
+) -> Option<LightmapHit> {
     let hit = accel.intersect(o, d, f32::INFINITY)?;
-    let scene = &lm.scene;
     let inst = &scene.instances[hit.prim.instance as usize];
     let mesh = &scene.meshes[inst.mesh];
-    let rect = lm.layout.instances[hit.prim.instance as usize]?;
+    let rect = layout.instances[hit.prim.instance as usize]?;
     let uv1 = mesh.uv1.as_ref()?;
     let t = hit.prim.triangle as usize * 3;
     let idx = [mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]].map(|i| i as usize);

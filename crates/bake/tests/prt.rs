@@ -199,3 +199,76 @@ fn interreflection_approaches_the_multi_bounce_reference() {
     };
     assert!(point_transfer(&scene, &accel, &pts, &bad, &[]).is_err());
 }
+
+/// The `prt` scene under its low-frequency sky, diffuse, environment light only: SH light-maps
+/// (per-texel transfer) against the path-traced reference, for 3–6 bands, shadowed (vs one
+/// scattering event) and inter-reflected (vs three).
+#[test]
+fn sh_lightmaps_match_the_reference_on_prt() {
+    use lightlab_bake::layout::LayoutSettings;
+    use lightlab_bake::prt::{bake_sh_lightmaps, render_sh_lightmaps};
+    use lightlab_core::metrics::relmse;
+    use lightlab_core::sh_env::{EnvFormat, project_env};
+    let mut scene = lightlab_scene::builtin::builtin("prt").unwrap();
+    scene.lights.clear();
+    let env = scene.environment.clone().expect("prt has a sky");
+    let layout = LayoutSettings {
+        texels_per_metre: 12.0,
+        ..Default::default()
+    };
+    let (w, spp) = (72u32, 8u32);
+    let reference = |depth: u32| {
+        let accel = Accel::new(&scene);
+        PathTracer::new(&scene, &accel)
+            .render(
+                &RenderSettings {
+                    width: w,
+                    height: w,
+                    spp: 256,
+                    max_depth: depth,
+                    ..Default::default()
+                },
+                &|_, _| true,
+            )
+            .unwrap()
+    };
+    let light_full: Vec<DVec3> = project_env(&env.image, EnvFormat::LatLong, 6)
+        .into_iter()
+        .map(|c| c * env.intensity as f64)
+        .collect();
+    let truncated = |bands: usize| -> Vec<DVec3> {
+        let mut l = light_full.clone();
+        l[sh::num_coeffs(bands)..].fill(DVec3::ZERO);
+        l
+    };
+    let (r1, r3) = (reference(1), reference(3));
+    let mut table = vec![];
+    for kind in [
+        TransferKind::Shadowed,
+        TransferKind::Interreflected { bounces: 2 },
+    ] {
+        let s = TransferSettings {
+            bands: 6,
+            samples: 192,
+            kind,
+            seed: 5,
+        };
+        let sl = bake_sh_lightmaps(&scene, &layout, &s).unwrap();
+        for bands in [3, 4, 5, 6] {
+            let img = render_sh_lightmaps(&sl, &truncated(bands), w, w, 0, spp).unwrap();
+            let (e1, e3) = (relmse(&img, &r1).unwrap(), relmse(&img, &r3).unwrap());
+            println!(
+                "{kind:?}, {bands} bands: relMSE vs 1-bounce reference {e1:.4}, vs 3-bounce {e3:.4}"
+            );
+            table.push((kind, bands, e1, e3));
+        }
+    }
+    let get =
+        |kind: TransferKind, bands| *table.iter().find(|t| t.0 == kind && t.1 == bands).unwrap();
+    // The bound: 5 bands shadowed ≤ 0.03 against the single-bounce reference.
+    let s5 = get(TransferKind::Shadowed, 5);
+    assert!(s5.2 <= 0.03, "{table:?}");
+    // Inter-reflected transfer is closer to the multi-bounce reference than shadowed transfer.
+    let i5 = get(TransferKind::Interreflected { bounces: 2 }, 5);
+    assert!(i5.3 < s5.3, "{table:?}");
+}
