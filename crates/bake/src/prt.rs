@@ -474,3 +474,126 @@ pub fn render_sh_lightmaps(
         data,
     })
 }
+
+/// The manifest of a baked SH light-map folder (`manifest.json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShManifest {
+    pub format: String,
+    pub version: u32,
+    pub scene: String,
+    pub quantity: String,
+    pub bands: usize,
+    pub transfer: TransferSettings,
+    pub layout: crate::layout::Layout,
+    /// Per page, its coefficient images: coefficient c is channel c%3 of image c/3.
+    pub pages: Vec<Vec<String>>,
+    pub seconds: f64,
+}
+
+pub const SH_FORMAT: &str = "lightlab-sh-lightmaps";
+
+fn io_err(path: &std::path::Path, e: impl std::fmt::Display) -> crate::BakeError {
+    crate::BakeError::Io(format!("{}: {e}", path.display()))
+}
+
+/// Write SH light-maps to `dir`: `sh-K-J.exr` (page K, coefficient image J, 32-bit float) and
+/// the manifest, last (a folder with a manifest is complete).
+pub fn write_sh(
+    sl: &ShLightmaps,
+    dir: &std::path::Path,
+    scene_name: &str,
+    seconds: f64,
+) -> Result<ShManifest, crate::BakeError> {
+    use lightlab_core::image::LdrSettings;
+    std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
+    let mut pages = vec![];
+    for (k, imgs) in sl.pages.iter().enumerate() {
+        let mut names = vec![];
+        for (j, img) in imgs.iter().enumerate() {
+            let name = format!("sh-{k}-{j}.exr");
+            let p = dir.join(&name);
+            img.write(&p, LdrSettings::default())
+                .map_err(|e| io_err(&p, e))?;
+            names.push(name);
+        }
+        pages.push(names);
+    }
+    let m = ShManifest {
+        format: SH_FORMAT.into(),
+        version: 1,
+        scene: scene_name.into(),
+        quantity: "diffuse transfer t_i = (1/pi) int V max(n.w,0) Y_i dw: E/pi = sum l_i t_i"
+            .into(),
+        bands: sl.bands,
+        transfer: sl.settings,
+        layout: sl.layout.clone(),
+        pages,
+        seconds,
+    };
+    let path = dir.join(crate::output::MANIFEST);
+    let json = serde_json::to_string_pretty(&m).map_err(|e| io_err(&path, e))?;
+    lightlab_core::image::write_atomic(&path, |mut f| {
+        use std::io::Write;
+        f.write_all(json.as_bytes())
+            .map_err(|e| lightlab_core::image::ImageError::Io {
+                path: path.clone(),
+                source: e,
+            })
+    })
+    .map_err(|e| io_err(&path, e))?;
+    Ok(m)
+}
+
+/// Read an SH light-map folder for `scene` (the unwrap is re-run and must match).
+pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crate::BakeError> {
+    let path = dir.join(crate::output::MANIFEST);
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        io_err(
+            &path,
+            format!("{e} (is this a folder written by `lightlab bake --method sh`?)"),
+        )
+    })?;
+    let m: ShManifest = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
+    if m.format != SH_FORMAT || m.version != 1 {
+        return Err(io_err(
+            &path,
+            format!("not an SH light-map folder ({} {})", m.format, m.version),
+        ));
+    }
+    let mut scene = scene.clone();
+    let layout = crate::layout::unwrap_scene(&mut scene, &m.layout.settings)?;
+    if layout.pages != m.layout.pages || layout.instances != m.layout.instances {
+        return Err(crate::BakeError::Scene(format!(
+            "the SH light-maps in {} were baked for a different scene ('{}')",
+            dir.display(),
+            m.scene
+        )));
+    }
+    let images = sh::num_coeffs(m.bands).div_ceil(3);
+    if m.pages.len() != layout.pages.len() || m.pages.iter().any(|p| p.len() != images) {
+        return Err(io_err(
+            &path,
+            "the page list does not match the layout and band count",
+        ));
+    }
+    let mut pages = vec![];
+    for (k, names) in m.pages.iter().enumerate() {
+        let mut imgs = vec![];
+        for name in names {
+            let p = dir.join(name);
+            let img = lightlab_core::image::Image::read(&p).map_err(|e| io_err(&p, e))?;
+            if [img.width, img.height] != layout.pages[k] {
+                return Err(io_err(&p, "does not match its page's size"));
+            }
+            imgs.push(img);
+        }
+        pages.push(imgs);
+    }
+    Ok(ShLightmaps {
+        scene,
+        layout,
+        bands: m.bands,
+        pages,
+        settings: m.transfer,
+    })
+}

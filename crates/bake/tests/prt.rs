@@ -272,3 +272,35 @@ fn sh_lightmaps_match_the_reference_on_prt() {
     let i5 = get(TransferKind::Interreflected { bounces: 2 }, 5);
     assert!(i5.3 < s5.3, "{table:?}");
 }
+
+#[test]
+fn sh_lightmap_folder_round_trips() {
+    use lightlab_bake::layout::LayoutSettings;
+    use lightlab_bake::prt::{bake_sh_lightmaps, read_sh, write_sh};
+    let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
+    let layout = LayoutSettings {
+        texels_per_metre: 8.0,
+        ..Default::default()
+    };
+    let s = TransferSettings {
+        bands: 4,
+        samples: 16,
+        kind: TransferKind::Shadowed,
+        seed: 2,
+    };
+    let sl = bake_sh_lightmaps(&scene, &layout, &s).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let m = write_sh(&sl, dir.path(), "cornell", 0.0).unwrap();
+    assert_eq!(m.pages[0].len(), 6, "16 coefficients in 6 RGB images");
+    let back = read_sh(dir.path(), &scene).unwrap();
+    assert_eq!(back.bands, 4);
+    assert_eq!(back.layout, sl.layout);
+    for (a, b) in back.pages.iter().flatten().zip(sl.pages.iter().flatten()) {
+        assert_eq!(a.data, b.data);
+    }
+    let room = lightlab_scene::builtin::builtin("room").unwrap();
+    assert!(matches!(
+        read_sh(dir.path(), &room),
+        Err(lightlab_bake::BakeError::Scene(_))
+    ));
+}

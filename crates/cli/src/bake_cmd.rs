@@ -54,6 +54,18 @@ pub struct BakeArgs {
     pub gltf: bool,
     #[arg(long, default_value_t = 0)]
     pub bake_seed: u64,
+    /// `--method sh`: SH bands (l_max + 1), 1..8; 4 as Fuchs, 5 as McKenzie Chapter.
+    #[arg(long, default_value_t = 4)]
+    pub bands: usize,
+    /// `--method sh`: unshadowed, shadowed or interreflected transfer.
+    #[arg(long, default_value = "interreflected")]
+    pub transfer: String,
+    /// `--method sh`: bounces of inter-reflected transfer.
+    #[arg(long, default_value_t = 2)]
+    pub bounces: u32,
+    /// `--method sh`: directions per texel and vertex.
+    #[arg(long, default_value_t = 256)]
+    pub transfer_samples: u32,
 }
 
 impl Default for BakeArgs {
@@ -69,6 +81,10 @@ impl Default for BakeArgs {
             png: false,
             gltf: false,
             bake_seed: 0,
+            bands: 4,
+            transfer: "interreflected".into(),
+            bounces: 2,
+            transfer_samples: 256,
         }
     }
 }
@@ -147,9 +163,12 @@ pub fn bake_with_progress(scene: &Scene, settings: &BakeSettings) -> Result<Ligh
 
 /// `lightlab bake --method radiosity|path`.
 pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
-    if ["sh", "shl", "prt", "prt-textured", "prt-hierarchical"].contains(&method) {
+    if method == "sh" {
+        return bake_sh(scene, out, args, json);
+    }
+    if ["shl", "prt", "prt-textured", "prt-hierarchical"].contains(&method) {
         return Err(crate::not_implemented(format!(
-            "bake method '{method}' (the SH and PRT bakers are planned)"
+            "bake method '{method}' (the PRT bakers are planned; `sh` bakes SH light-maps)"
         )));
     }
     let Some(m) = Method::parse(method) else {
@@ -194,6 +213,55 @@ pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool)
     }
     if json {
         println!("{}", serde_json::to_string(&manifest.stats)?);
+    }
+    Ok(())
+}
+
+/// `lightlab bake --method sh`: SH light-maps (per-texel diffuse transfer, Fuchs §5).
+fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
+    use lightlab_bake::prt::{TransferKind, TransferSettings, bake_sh_lightmaps, write_sh};
+    let kind = match args.transfer.as_str() {
+        "unshadowed" => TransferKind::Unshadowed,
+        "shadowed" => TransferKind::Shadowed,
+        "interreflected" => TransferKind::Interreflected {
+            bounces: args.bounces,
+        },
+        t => bail!("--transfer must be unshadowed, shadowed or interreflected, not '{t}'"),
+    };
+    let s = TransferSettings {
+        bands: args.bands,
+        samples: args.transfer_samples,
+        kind,
+        seed: args.bake_seed,
+    };
+    let layout = lightlab_bake::layout::LayoutSettings {
+        texels_per_metre: args.texels_per_metre,
+        ..Default::default()
+    };
+    eprintln!(
+        "baking {} SH light-maps: {} bands, {:?}, {} directions per texel, {} texels/m",
+        scene.name, s.bands, kind, s.samples, args.texels_per_metre
+    );
+    let t = std::time::Instant::now();
+    let sl = bake_sh_lightmaps(scene, &layout, &s)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let m = write_sh(&sl, out, &scene.name, seconds)?;
+    eprintln!(
+        "baked {} in {seconds:.2} s: {} pages × {} coefficient images; wrote {}",
+        scene.name,
+        m.pages.len(),
+        m.pages.first().map_or(0, |p| p.len()),
+        out.display()
+    );
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "scene": scene.name, "method": "sh", "bands": s.bands, "seconds": seconds,
+                "pages": m.pages.len(), "texels_per_metre": args.texels_per_metre,
+                "samples": s.samples, "transfer": args.transfer,
+            })
+        );
     }
     Ok(())
 }

@@ -213,8 +213,8 @@ fn compare_rejects_different_sizes_and_unreadable_files() {
 #[test]
 fn unbuilt_methods_exit_with_code_2() {
     for args in [
-        vec!["bake", "--scene", "cornell", "--method", "sh"],
         vec!["bake", "--scene", "cornell", "--method", "prt"],
+        vec!["bake", "--scene", "cornell", "--method", "prt-textured"],
     ] {
         let o = lightlab(&args);
         assert_eq!(o.status.code(), Some(2), "{args:?}");
@@ -657,4 +657,49 @@ fn viewer_window_shows_what_render_writes() {
     let o = lightlab(&["view", "--scene", "shadows", "--technique", "reference"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("GPU techniques"), "{}", stderr(&o));
+}
+
+#[test]
+fn bake_sh_lightmaps_writes_coefficient_pages() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sh");
+    let o = lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "sh",
+        "--bands",
+        "3",
+        "--texels-per-metre",
+        "8",
+        "--transfer-samples",
+        "16",
+        "--bounces",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
+    assert_eq!(v["bands"], 3);
+    // 9 coefficients: three RGB images per page.
+    for f in ["manifest.json", "sh-0-0.exr", "sh-0-1.exr", "sh-0-2.exr"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    assert!(!out.join("sh-0-3.exr").exists());
+    let o = lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "sh",
+        "--transfer",
+        "glossy",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--transfer"), "{}", stderr(&o));
 }
