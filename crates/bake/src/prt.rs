@@ -357,30 +357,45 @@ impl ShLightmaps {
     }
 }
 
+impl From<TransferError> for crate::BakeError {
+    fn from(e: TransferError) -> Self {
+        match e {
+            TransferError::Settings(m) => crate::BakeError::Settings(m),
+        }
+    }
+}
+
 /// Bake SH light-maps: unwrap, rasterise texels, probe validity, compute every valid texel's
 /// transfer (inter-reflection through per-vertex bounces), dilate each coefficient image.
+/// `progress` is called per stage and page; returning false cancels.
 pub fn bake_sh_lightmaps(
     scene: &Scene,
     layout: &crate::layout::LayoutSettings,
     s: &TransferSettings,
+    progress: crate::Progress,
 ) -> Result<ShLightmaps, crate::BakeError> {
-    check(s).map_err(|e| crate::BakeError::Settings(e.to_string()))?;
+    check(s)?;
     let mut scene = scene.clone();
     let layout = crate::layout::unwrap_scene(&mut scene, layout)?;
     let texels = crate::texels::rasterize(&scene, &layout);
     let accel = Accel::new(&scene);
     let valid = crate::texels::probe_validity(&texels, &scene, &accel, 32, 0.25, s.seed);
+    if !progress("vertex transfer", 0, 1) {
+        return Err(crate::BakeError::Cancelled);
+    }
     let sources = if matches!(s.kind, TransferKind::Interreflected { .. }) {
-        vertex_transfer(&scene, &accel, s)
-            .map_err(|e| crate::BakeError::Settings(e.to_string()))?
-            .1
+        vertex_transfer(&scene, &accel, s)?.1
     } else {
         vec![]
     };
+    let total_pages = texels.pages.len();
     let nc = sh::num_coeffs(s.bands);
     let images = nc.div_ceil(3);
     let mut pages = vec![];
-    for (page, ok) in texels.pages.iter().zip(&valid) {
+    for (k, (page, ok)) in texels.pages.iter().zip(&valid).enumerate() {
+        if !progress("texel transfer", k, total_pages) {
+            return Err(crate::BakeError::Cancelled);
+        }
         let idx: Vec<usize> = (0..page.samples.len())
             .filter(|&i| page.samples[i].is_some() && ok[i])
             .collect();
@@ -391,8 +406,7 @@ pub fn bake_sh_lightmaps(
                 (t.p + t.ng * ray_eps(t.p), t.ns)
             })
             .collect();
-        let tr = point_transfer(&scene, &accel, &pts, s, &sources)
-            .map_err(|e| crate::BakeError::Settings(e.to_string()))?;
+        let tr = point_transfer(&scene, &accel, &pts, s, &sources)?;
         let n = page.samples.len();
         let mut imgs = vec![];
         for k in 0..images {
@@ -413,6 +427,7 @@ pub fn bake_sh_lightmaps(
         }
         pages.push(imgs);
     }
+    progress("texel transfer", total_pages, total_pages);
     Ok(ShLightmaps {
         scene,
         layout,

@@ -253,7 +253,7 @@ fn sh_lightmaps_match_the_reference_on_prt() {
             kind,
             seed: 5,
         };
-        let sl = bake_sh_lightmaps(&scene, &layout, &s).unwrap();
+        let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
         for bands in [3, 4, 5, 6] {
             let img = render_sh_lightmaps(&sl, &truncated(bands), w, w, 0, spp).unwrap();
             let (e1, e3) = (relmse(&img, &r1).unwrap(), relmse(&img, &r3).unwrap());
@@ -288,7 +288,7 @@ fn sh_lightmap_folder_round_trips() {
         kind: TransferKind::Shadowed,
         seed: 2,
     };
-    let sl = bake_sh_lightmaps(&scene, &layout, &s).unwrap();
+    let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let m = write_sh(&sl, dir.path(), "cornell", 0.0).unwrap();
     assert_eq!(m.pages[0].len(), 6, "16 coefficients in 6 RGB images");
@@ -302,5 +302,10 @@ fn sh_lightmap_folder_round_trips() {
     assert!(matches!(
         read_sh(dir.path(), &room),
         Err(lightlab_bake::BakeError::Scene(_))
+    ));
+    // Progress reaches the caller, and returning false cancels.
+    assert!(matches!(
+        bake_sh_lightmaps(&scene, &layout, &s, &|_, _, _| false),
+        Err(lightlab_bake::BakeError::Cancelled)
     ));
 }

@@ -243,7 +243,20 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
         scene.name, s.bands, kind, s.samples, args.texels_per_metre
     );
     let t = std::time::Instant::now();
-    let sl = bake_sh_lightmaps(scene, &layout, &s)?;
+    let bar = ProgressBar::new(1);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix} {msg} [{bar:30}] {pos}/{len}, {elapsed}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(format!("{} sh", scene.name));
+    let sl = bake_sh_lightmaps(scene, &layout, &s, &|stage, done, total| {
+        bar.set_message(stage.to_string());
+        bar.set_length(total.max(done).max(1) as u64);
+        bar.set_position(done as u64);
+        true
+    })?;
+    bar.finish_and_clear();
     let seconds = t.elapsed().as_secs_f64();
     let m = write_sh(&sl, out, &scene.name, seconds)?;
     eprintln!(
