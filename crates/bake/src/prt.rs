@@ -88,7 +88,14 @@ impl VertexTransfer {
     }
 
     /// Transfer at a hit: the barycentric blend of its triangle's vertices.
-    fn at_hit(&self, scene: &Scene, instance: usize, triangle: usize, bary: Vec2, out: &mut [f32]) {
+    pub fn at_hit(
+        &self,
+        scene: &Scene,
+        instance: usize,
+        triangle: usize,
+        bary: Vec2,
+        out: &mut [f32],
+    ) {
         let mesh = &scene.meshes[scene.instances[instance].mesh];
         let w = [1.0 - bary.x - bary.y, bary.x, bary.y];
         out.fill(0.0);
@@ -610,5 +617,66 @@ pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crat
         bands: m.bands,
         pages,
         settings: m.transfer,
+    })
+}
+
+/// Render per-vertex transfer on the CPU under incident radiance `light` (SH, RGB): at each hit
+/// the transfer is interpolated from the triangle's vertices (Gouraud, as `prt-vertex` on the
+/// GPU will), radiance = albedo × Σ lᵢ tᵢ; the environment where rays escape.
+pub fn render_vertex_transfer(
+    scene: &Scene,
+    vt: &VertexTransfer,
+    light: &[glam::DVec3],
+    width: u32,
+    height: u32,
+    camera: usize,
+    spp: u32,
+) -> Option<lightlab_core::image::Image> {
+    let cam = scene.cameras.get(camera)?;
+    let accel = Accel::new(scene);
+    let aspect = width as f32 / height as f32;
+    let nc = sh::num_coeffs(vt.bands);
+    let data = (0..width * height)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let mut rng = Rng::new(7, i as u64);
+            let mut t = vec![0.0f32; nc];
+            let mut sum = Vec3::ZERO;
+            for _ in 0..spp.max(1) {
+                let j = if spp > 1 {
+                    rng.next_vec2()
+                } else {
+                    Vec2::splat(0.5)
+                };
+                let ndc = Vec2::new(
+                    (x as f32 + j.x) / width as f32 * 2.0 - 1.0,
+                    1.0 - (y as f32 + j.y) / height as f32 * 2.0,
+                );
+                let d = cam.ray_direction(ndc, aspect);
+                if let Some(h) = accel.intersect(cam.position(), d, f32::INFINITY) {
+                    let (ii, tri) = (h.prim.instance as usize, h.prim.triangle as usize);
+                    let mesh = &scene.meshes[scene.instances[ii].mesh];
+                    vt.at_hit(scene, ii, tri, h.bary, &mut t);
+                    let uv0 = if mesh.uv0.len() == mesh.positions.len() {
+                        let b = [1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y];
+                        (0..3)
+                            .map(|k| mesh.uv0[mesh.indices[tri * 3 + k] as usize] * b[k])
+                            .sum()
+                    } else {
+                        Vec2::ZERO
+                    };
+                    sum += albedo(scene, mesh.material, uv0) * shade(&t, light).max(Vec3::ZERO);
+                } else if let Some(env) = &scene.environment {
+                    sum += env.radiance(d);
+                }
+            }
+            sum / spp.max(1) as f32
+        })
+        .collect();
+    Some(lightlab_core::image::Image {
+        width,
+        height,
+        data,
     })
 }
