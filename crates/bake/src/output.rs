@@ -152,8 +152,14 @@ pub fn write(
         directional_pages,
         gltf,
     };
+    write_manifest(dir, &manifest)?;
+    Ok(manifest)
+}
+
+/// Write `DIR/manifest.json` atomically (last, so a folder with a manifest is complete).
+pub(crate) fn write_manifest<T: Serialize>(dir: &Path, manifest: &T) -> Result<(), BakeError> {
     let path = dir.join(MANIFEST);
-    let json = serde_json::to_string_pretty(&manifest).map_err(|e| io(&path, e))?;
+    let json = serde_json::to_string_pretty(manifest).map_err(|e| io(&path, e))?;
     write_atomic(&path, |mut f| {
         f.write_all(json.as_bytes())
             .map_err(|e| lightlab_core::image::ImageError::Io {
@@ -161,8 +167,7 @@ pub fn write(
                 source: e,
             })
     })
-    .map_err(|e| io(&path, e))?;
-    Ok(manifest)
+    .map_err(|e| io(&path, e))
 }
 
 /// The glTF file of a bake.

@@ -226,14 +226,7 @@ fn gather_point(
                 if !front && !mat.double_sided {
                     continue;
                 }
-                let uv0 = if mesh.uv0.len() == mesh.positions.len() {
-                    let b = [1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y];
-                    (0..3)
-                        .map(|j| mesh.uv0[mesh.indices[tri * 3 + j] as usize] * b[j])
-                        .sum()
-                } else {
-                    Vec2::ZERO
-                };
+                let uv0 = crate::view::hit_uv0(mesh, tri, h.bary);
                 // Luminance-free: a scalar transfer carries the albedo's mean (the RGB split is
                 // left to the albedo applied at shading time of the receiver).
                 let rho = albedo(scene, mesh.material, uv0).element_sum() / 3.0;
@@ -456,44 +449,12 @@ pub fn render_sh_lightmaps(
     spp: u32,
 ) -> Option<lightlab_core::image::Image> {
     let scene = &sl.scene;
-    let cam = scene.cameras.get(camera)?;
-    let accel = Accel::new(scene);
-    let aspect = width as f32 / height as f32;
     let nc = sh::num_coeffs(sl.bands);
-    let data = (0..width * height)
-        .into_par_iter()
-        .map(|i| {
-            let (x, y) = (i % width, i / width);
-            let mut rng = Rng::new(7, i as u64);
-            let mut t = vec![0.0f32; nc];
-            let mut sum = Vec3::ZERO;
-            for _ in 0..spp.max(1) {
-                let j = if spp > 1 {
-                    rng.next_vec2()
-                } else {
-                    Vec2::splat(0.5)
-                };
-                let ndc = Vec2::new(
-                    (x as f32 + j.x) / width as f32 * 2.0 - 1.0,
-                    1.0 - (y as f32 + j.y) / height as f32 * 2.0,
-                );
-                let d = cam.ray_direction(ndc, aspect);
-                let hit = crate::view::layout_hit(scene, &sl.layout, &accel, cam.position(), d);
-                if let Some(h) = hit {
-                    sl.sample(h.page, h.uv, &mut t);
-                    let e = shade(&t, light).max(Vec3::ZERO);
-                    sum += albedo(scene, h.material, h.uv0) * e;
-                } else if let Some(env) = &scene.environment {
-                    sum += env.radiance(d);
-                }
-            }
-            sum / spp.max(1) as f32
-        })
-        .collect();
-    Some(lightlab_core::image::Image {
-        width,
-        height,
-        data,
+    crate::view::render_camera(scene, width, height, camera, spp, |accel, o, d| {
+        let h = crate::view::layout_hit(scene, &sl.layout, accel, o, d)?;
+        let mut t = vec![0.0f32; nc];
+        sl.sample(h.page, h.uv, &mut t);
+        Some(albedo(scene, h.material, h.uv0) * shade(&t, light).max(Vec3::ZERO))
     })
 }
 
@@ -552,17 +513,7 @@ pub fn write_sh(
         pages,
         seconds,
     };
-    let path = dir.join(crate::output::MANIFEST);
-    let json = serde_json::to_string_pretty(&m).map_err(|e| io_err(&path, e))?;
-    lightlab_core::image::write_atomic(&path, |mut f| {
-        use std::io::Write;
-        f.write_all(json.as_bytes())
-            .map_err(|e| lightlab_core::image::ImageError::Io {
-                path: path.clone(),
-                source: e,
-            })
-    })
-    .map_err(|e| io_err(&path, e))?;
+    crate::output::write_manifest(dir, &m)?;
     Ok(m)
 }
 
@@ -632,51 +583,14 @@ pub fn render_vertex_transfer(
     camera: usize,
     spp: u32,
 ) -> Option<lightlab_core::image::Image> {
-    let cam = scene.cameras.get(camera)?;
-    let accel = Accel::new(scene);
-    let aspect = width as f32 / height as f32;
     let nc = sh::num_coeffs(vt.bands);
-    let data = (0..width * height)
-        .into_par_iter()
-        .map(|i| {
-            let (x, y) = (i % width, i / width);
-            let mut rng = Rng::new(7, i as u64);
-            let mut t = vec![0.0f32; nc];
-            let mut sum = Vec3::ZERO;
-            for _ in 0..spp.max(1) {
-                let j = if spp > 1 {
-                    rng.next_vec2()
-                } else {
-                    Vec2::splat(0.5)
-                };
-                let ndc = Vec2::new(
-                    (x as f32 + j.x) / width as f32 * 2.0 - 1.0,
-                    1.0 - (y as f32 + j.y) / height as f32 * 2.0,
-                );
-                let d = cam.ray_direction(ndc, aspect);
-                if let Some(h) = accel.intersect(cam.position(), d, f32::INFINITY) {
-                    let (ii, tri) = (h.prim.instance as usize, h.prim.triangle as usize);
-                    let mesh = &scene.meshes[scene.instances[ii].mesh];
-                    vt.at_hit(scene, ii, tri, h.bary, &mut t);
-                    let uv0 = if mesh.uv0.len() == mesh.positions.len() {
-                        let b = [1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y];
-                        (0..3)
-                            .map(|k| mesh.uv0[mesh.indices[tri * 3 + k] as usize] * b[k])
-                            .sum()
-                    } else {
-                        Vec2::ZERO
-                    };
-                    sum += albedo(scene, mesh.material, uv0) * shade(&t, light).max(Vec3::ZERO);
-                } else if let Some(env) = &scene.environment {
-                    sum += env.radiance(d);
-                }
-            }
-            sum / spp.max(1) as f32
-        })
-        .collect();
-    Some(lightlab_core::image::Image {
-        width,
-        height,
-        data,
+    crate::view::render_camera(scene, width, height, camera, spp, |accel, o, d| {
+        let h = accel.intersect(o, d, f32::INFINITY)?;
+        let (ii, tri) = (h.prim.instance as usize, h.prim.triangle as usize);
+        let mesh = &scene.meshes[scene.instances[ii].mesh];
+        let mut t = vec![0.0f32; nc];
+        vt.at_hit(scene, ii, tri, h.bary, &mut t);
+        let uv0 = crate::view::hit_uv0(mesh, tri, h.bary);
+        Some(albedo(scene, mesh.material, uv0) * shade(&t, light).max(Vec3::ZERO))
     })
 }

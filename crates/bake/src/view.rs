@@ -8,6 +8,7 @@ use crate::texels::albedo;
 use glam::{Vec2, Vec3};
 use lightlab_core::image::Image;
 use lightlab_core::sampling::Rng;
+use lightlab_scene::{Mesh, Scene};
 use lightlab_trace::Accel;
 use lightlab_trace::lights::emission;
 use rayon::prelude::*;
@@ -47,7 +48,7 @@ pub fn lightmap_hit(lm: &Lightmaps, accel: &Accel, o: Vec3, d: Vec3) -> Option<L
 
 /// [`lightmap_hit`] for any data laid out by `layout` (light-maps, SH light-maps).
 pub fn layout_hit(
-    scene: &lightlab_scene::Scene,
+    scene: &Scene,
     layout: &crate::layout::Layout,
     accel: &Accel,
     o: Vec3,
@@ -57,16 +58,9 @@ pub fn layout_hit(
     let inst = &scene.instances[hit.prim.instance as usize];
     let mesh = &scene.meshes[inst.mesh];
     let rect = layout.instances[hit.prim.instance as usize]?;
-    let uv1 = mesh.uv1.as_ref()?;
-    let t = hit.prim.triangle as usize * 3;
-    let idx = [mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]].map(|i| i as usize);
-    let b = [1.0 - hit.bary.x - hit.bary.y, hit.bary.x, hit.bary.y];
-    let u1 = uv1[idx[0]] * b[0] + uv1[idx[1]] * b[1] + uv1[idx[2]] * b[2];
-    let uv0 = if mesh.uv0.len() == mesh.positions.len() {
-        mesh.uv0[idx[0]] * b[0] + mesh.uv0[idx[1]] * b[1] + mesh.uv0[idx[2]] * b[2]
-    } else {
-        Vec2::ZERO
-    };
+    let tri = hit.prim.triangle as usize;
+    let u1 = interpolate(mesh.uv1.as_ref()?, mesh, tri, hit.bary);
+    let uv0 = hit_uv0(mesh, tri, hit.bary);
     let w = accel.world_triangle(hit.slot);
     let ng = (w[1] - w[0]).cross(w[2] - w[0]);
     Some(LightmapHit {
@@ -76,6 +70,72 @@ pub fn layout_hit(
         material: mesh.material,
         uv0,
         front: ng.dot(d) < 0.0,
+    })
+}
+
+/// A per-vertex attribute at barycentric `bary` of triangle `tri` (obvhs's weights of the
+/// second and third vertices).
+pub fn interpolate(values: &[Vec2], mesh: &Mesh, tri: usize, bary: Vec2) -> Vec2 {
+    let b = [1.0 - bary.x - bary.y, bary.x, bary.y];
+    (0..3)
+        .map(|k| values[mesh.indices[tri * 3 + k] as usize] * b[k])
+        .sum()
+}
+
+/// TEXCOORD_0 at a hit (zero for meshes without it).
+pub fn hit_uv0(mesh: &Mesh, tri: usize, bary: Vec2) -> Vec2 {
+    if mesh.uv0.len() == mesh.positions.len() {
+        interpolate(&mesh.uv0, mesh, tri, bary)
+    } else {
+        Vec2::ZERO
+    }
+}
+
+/// Render `scene` from camera `camera` with `spp` jittered samples per pixel: `radiance`
+/// returns what a camera ray (origin, direction) sees, or None where it escapes (the
+/// environment is drawn there). The pixel loop of every CPU view of a baked technique.
+pub fn render_camera(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    camera: usize,
+    spp: u32,
+    radiance: impl Fn(&Accel, Vec3, Vec3) -> Option<Vec3> + Sync,
+) -> Option<Image> {
+    let cam = scene.cameras.get(camera)?;
+    let accel = Accel::new(scene);
+    let aspect = width as f32 / height as f32;
+    let origin = cam.position();
+    let data: Vec<Vec3> = (0..width * height)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let mut rng = Rng::new(7, i as u64);
+            let mut sum = Vec3::ZERO;
+            for _ in 0..spp.max(1) {
+                let j = if spp > 1 {
+                    rng.next_vec2()
+                } else {
+                    Vec2::splat(0.5)
+                };
+                let ndc = Vec2::new(
+                    (x as f32 + j.x) / width as f32 * 2.0 - 1.0,
+                    1.0 - (y as f32 + j.y) / height as f32 * 2.0,
+                );
+                let d = cam.ray_direction(ndc, aspect);
+                if let Some(c) = radiance(&accel, origin, d) {
+                    sum += c;
+                } else if let Some(env) = &scene.environment {
+                    sum += env.radiance(d);
+                }
+            }
+            sum / spp.max(1) as f32
+        })
+        .collect();
+    Some(Image {
+        width,
+        height,
+        data,
     })
 }
 
@@ -98,44 +158,13 @@ pub fn render(
     spp: u32,
 ) -> Option<Image> {
     let scene = &lm.scene;
-    let cam = scene.cameras.get(camera)?;
-    let accel = Accel::new(scene);
-    let aspect = width as f32 / height as f32;
-    let origin = cam.position();
-    let data: Vec<Vec3> = (0..width * height)
-        .into_par_iter()
-        .map(|i| {
-            let (x, y) = (i % width, i / width);
-            let mut rng = Rng::new(7, i as u64);
-            let mut sum = Vec3::ZERO;
-            for _ in 0..spp.max(1) {
-                let j = if spp > 1 {
-                    rng.next_vec2()
-                } else {
-                    Vec2::splat(0.5)
-                };
-                let ndc = Vec2::new(
-                    (x as f32 + j.x) / width as f32 * 2.0 - 1.0,
-                    1.0 - (y as f32 + j.y) / height as f32 * 2.0,
-                );
-                let d = cam.ray_direction(ndc, aspect);
-                if let Some(h) = lightmap_hit(lm, &accel, origin, d) {
-                    let mat = &scene.materials[h.material];
-                    let mut c = albedo(scene, h.material, h.uv0) * sample(lm, h.page, h.uv, filter);
-                    if mat.is_emissive() && (h.front || mat.double_sided) {
-                        c += emission(scene, h.material, h.uv0);
-                    }
-                    sum += c;
-                } else if let Some(env) = &scene.environment {
-                    sum += env.radiance(d);
-                }
-            }
-            sum / spp.max(1) as f32
-        })
-        .collect();
-    Some(Image {
-        width,
-        height,
-        data,
+    render_camera(scene, width, height, camera, spp, |accel, o, d| {
+        let h = lightmap_hit(lm, accel, o, d)?;
+        let mat = &scene.materials[h.material];
+        let mut c = albedo(scene, h.material, h.uv0) * sample(lm, h.page, h.uv, filter);
+        if mat.is_emissive() && (h.front || mat.double_sided) {
+            c += emission(scene, h.material, h.uv0);
+        }
+        Some(c)
     })
 }

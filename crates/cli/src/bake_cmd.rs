@@ -137,17 +137,20 @@ impl BakeArgs {
     }
 }
 
-/// Bake with a progress bar on stderr.
-pub fn bake_with_progress(scene: &Scene, settings: &BakeSettings) -> Result<Lightmaps> {
+/// Run a bake with a progress bar on stderr: `bake` gets the library's progress callback.
+fn with_progress_bar<T>(
+    prefix: String,
+    bake: impl FnOnce(lightlab_bake::Progress) -> Result<T, lightlab_bake::BakeError>,
+) -> Result<T> {
     let bar = ProgressBar::new(1);
     bar.set_style(
         ProgressStyle::with_template("{prefix} {msg} [{bar:30}] {pos}/{len}, {elapsed}")
             .expect("valid template")
             .progress_chars("=> "),
     );
-    bar.set_prefix(format!("{} {}", scene.name, settings.method.name()));
+    bar.set_prefix(prefix);
     let last = Mutex::new(String::new());
-    let lm = bake_lightmaps(scene, settings, &|stage, done, total| {
+    let out = bake(&|stage, done, total| {
         let mut l = last.lock().expect("progress lock");
         if *l != stage {
             *l = stage.to_string();
@@ -156,9 +159,17 @@ pub fn bake_with_progress(scene: &Scene, settings: &BakeSettings) -> Result<Ligh
         bar.set_length(total.max(done).max(1) as u64);
         bar.set_position(done as u64);
         true
-    })?;
+    });
     bar.finish_and_clear();
-    Ok(lm)
+    Ok(out?)
+}
+
+/// Bake light-maps with a progress bar on stderr.
+pub fn bake_with_progress(scene: &Scene, settings: &BakeSettings) -> Result<Lightmaps> {
+    with_progress_bar(
+        format!("{} {}", scene.name, settings.method.name()),
+        |progress| bake_lightmaps(scene, settings, progress),
+    )
 }
 
 /// `lightlab bake --method radiosity|path`.
@@ -243,20 +254,9 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
         scene.name, s.bands, kind, s.samples, args.texels_per_metre
     );
     let t = std::time::Instant::now();
-    let bar = ProgressBar::new(1);
-    bar.set_style(
-        ProgressStyle::with_template("{prefix} {msg} [{bar:30}] {pos}/{len}, {elapsed}")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar.set_prefix(format!("{} sh", scene.name));
-    let sl = bake_sh_lightmaps(scene, &layout, &s, &|stage, done, total| {
-        bar.set_message(stage.to_string());
-        bar.set_length(total.max(done).max(1) as u64);
-        bar.set_position(done as u64);
-        true
+    let sl = with_progress_bar(format!("{} sh", scene.name), |progress| {
+        bake_sh_lightmaps(scene, &layout, &s, progress)
     })?;
-    bar.finish_and_clear();
     let seconds = t.elapsed().as_secs_f64();
     let m = write_sh(&sl, out, &scene.name, seconds)?;
     eprintln!(

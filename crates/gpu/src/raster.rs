@@ -1807,8 +1807,13 @@ impl Pipelines {
     }
 }
 
-/// Copy a texture (tightly packed texels of `bpp` bytes) to the CPU.
-fn read_texture(ctx: &GpuContext, tex: &wgpu::Texture, bpp: u32) -> Result<Vec<u8>, RasterError> {
+/// Copy a texture (tightly packed texels of `bpp` bytes) to the CPU. The texture needs
+/// `COPY_SRC` usage.
+pub fn read_texture(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    bpp: u32,
+) -> Result<Vec<u8>, RasterError> {
     let (w, h) = (tex.width(), tex.height());
     let row = (w * bpp).div_ceil(256) * 256;
     let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {

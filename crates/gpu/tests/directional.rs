@@ -3,11 +3,12 @@
 //! (which shades the normal map exactly) than the flat light-map, and equals it where the
 //! normal map is flat.
 
+mod common;
+
 use glam::{Vec3, Vec4};
 use lightlab_bake::{BakeSettings, Lightmaps, Method, bake_lightmaps, no_progress};
 use lightlab_core::image::Image;
 use lightlab_core::metrics::relmse;
-use lightlab_gpu::gpu_scene::UvRect;
 use lightlab_gpu::raster::{Ambient, LightmapInput, RasterSettings, Renderer, ShadowMethod};
 use lightlab_gpu::{GpuContext, test_context};
 use lightlab_scene::builtin::geom::quad_facing;
@@ -86,18 +87,7 @@ fn ridged_floor(tilt: f32) -> Scene {
 }
 
 fn gpu_render(ctx: &GpuContext, lm: &Lightmaps, directional: bool, n: u32, k: u32) -> Image {
-    let rects: Vec<Option<UvRect>> = lm
-        .layout
-        .instances
-        .iter()
-        .map(|r| {
-            r.map(|r| UvRect {
-                page: r.page,
-                offset: r.offset,
-                scale: r.scale,
-            })
-        })
-        .collect();
+    let rects = common::uv_rects(lm);
     let input = LightmapInput {
         pages: &lm.pages,
         rects: &rects,

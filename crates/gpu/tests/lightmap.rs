@@ -2,9 +2,10 @@
 //! bilinear and bicubic sampling must read the pages as the CPU does. Runs on lavapipe and
 //! llvmpipe in CI.
 
+mod common;
+
 use lightlab_bake::{BakeSettings, Method, bake_lightmaps, no_progress, view};
 use lightlab_core::metrics::relmse;
-use lightlab_gpu::gpu_scene::UvRect;
 use lightlab_gpu::raster::{Ambient, LightmapInput, RasterSettings, Renderer, ShadowMethod};
 use lightlab_gpu::test_context;
 
@@ -19,18 +20,7 @@ fn gpu_lightmap_matches_the_cpu_view() {
     s.layout.texels_per_metre = 16.0;
     s.gather.samples = 16;
     let lm = bake_lightmaps(&scene, &s, &no_progress).unwrap();
-    let rects: Vec<Option<UvRect>> = lm
-        .layout
-        .instances
-        .iter()
-        .map(|r| {
-            r.map(|r| UvRect {
-                page: r.page,
-                offset: r.offset,
-                scale: r.scale,
-            })
-        })
-        .collect();
+    let rects = common::uv_rects(&lm);
     let (n, k) = (96u32, 4u32);
     let mut lit = lm.scene.clone();
     lit.lights.clear();

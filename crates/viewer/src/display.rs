@@ -184,14 +184,6 @@ pub fn display_to_rgb8(
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     });
-    let row = (width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
-        * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("screenshot readback"),
-        size: row as u64 * height as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
     let mut enc = ctx.device.create_command_encoder(&Default::default());
     display.draw(
         ctx,
@@ -201,37 +193,9 @@ pub fn display_to_rgb8(
         exposure,
         tone,
     );
-    enc.copy_texture_to_buffer(
-        tex.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buf,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: None,
-            },
-        },
-        wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-    );
     ctx.queue.submit([enc.finish()]);
-    let slice = buf.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |_| {});
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| e.to_string())?;
-    let data = slice.get_mapped_range().map_err(|e| e.to_string())?;
-    let mut out = Vec::with_capacity((width * height) as usize);
-    for y in 0..height as usize {
-        let r = &data[y * row as usize..];
-        for x in 0..width as usize {
-            out.push([r[4 * x], r[4 * x + 1], r[4 * x + 2]]);
-        }
-    }
-    Ok(out)
+    let bytes = lightlab_gpu::raster::read_texture(ctx, &tex, 4).map_err(|e| e.to_string())?;
+    Ok(bytes.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect())
 }
 
 #[cfg(test)]
