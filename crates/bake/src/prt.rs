@@ -437,12 +437,12 @@ pub fn bake_sh_lightmaps(
     })
 }
 
-/// Render SH light-maps on the CPU under incident radiance `light` (SH, RGB; e.g. the scene's
-/// environment projected): radiance = albedo × Σ lᵢ tᵢ (+ emission), the environment where
-/// rays escape. The reference view of the `shl` techniques.
+/// Render SH light-maps on the CPU under the incident radiance of `light` (SH, RGB, blended
+/// from its sample points at each hit): radiance = albedo × Σ lᵢ tᵢ, the environment where rays
+/// escape. The reference view of the `shl` techniques.
 pub fn render_sh_lightmaps(
     sl: &ShLightmaps,
-    light: &[glam::DVec3],
+    light: &crate::sh_light::ShLighting,
     width: u32,
     height: u32,
     camera: usize,
@@ -454,7 +454,8 @@ pub fn render_sh_lightmaps(
         let h = crate::view::layout_hit(scene, &sl.layout, accel, o, d)?;
         let mut t = vec![0.0f32; nc];
         sl.sample(h.page, h.uv, &mut t);
-        Some(albedo(scene, h.material, h.uv0) * shade(&t, light).max(Vec3::ZERO))
+        let l = light.at(h.instance, h.p);
+        Some(albedo(scene, h.material, h.uv0) * shade(&t, &l).max(Vec3::ZERO))
     })
 }
 
@@ -571,13 +572,13 @@ pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crat
     })
 }
 
-/// Render per-vertex transfer on the CPU under incident radiance `light` (SH, RGB): at each hit
+/// Render per-vertex transfer on the CPU under the incident radiance of `light`: at each hit
 /// the transfer is interpolated from the triangle's vertices (Gouraud, as `prt-vertex` on the
-/// GPU will), radiance = albedo × Σ lᵢ tᵢ; the environment where rays escape.
+/// GPU), radiance = albedo × Σ lᵢ tᵢ; the environment where rays escape.
 pub fn render_vertex_transfer(
     scene: &Scene,
     vt: &VertexTransfer,
-    light: &[glam::DVec3],
+    light: &crate::sh_light::ShLighting,
     width: u32,
     height: u32,
     camera: usize,
@@ -591,6 +592,7 @@ pub fn render_vertex_transfer(
         let mut t = vec![0.0f32; nc];
         vt.at_hit(scene, ii, tri, h.bary, &mut t);
         let uv0 = crate::view::hit_uv0(mesh, tri, h.bary);
-        Some(albedo(scene, mesh.material, uv0) * shade(&t, light).max(Vec3::ZERO))
+        let l = light.at(ii, o + d * h.t);
+        Some(albedo(scene, mesh.material, uv0) * shade(&t, &l).max(Vec3::ZERO))
     })
 }

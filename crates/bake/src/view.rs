@@ -32,6 +32,7 @@ impl Filter {
 
 /// What a surface point reads from the light-maps: page, page UV and the hit's attributes.
 pub struct LightmapHit {
+    pub instance: usize,
     pub page: u32,
     pub uv: Vec2,
     pub p: Vec3,
@@ -64,6 +65,7 @@ pub fn layout_hit(
     let w = accel.world_triangle(hit.slot);
     let ng = (w[1] - w[0]).cross(w[2] - w[0]);
     Some(LightmapHit {
+        instance: hit.prim.instance as usize,
         page: rect.page,
         uv: rect.page_uv(u1),
         p: o + d * hit.t,

@@ -207,6 +207,7 @@ fn interreflection_approaches_the_multi_bounce_reference() {
 fn sh_lightmaps_match_the_reference_on_prt() {
     use lightlab_bake::layout::LayoutSettings;
     use lightlab_bake::prt::{bake_sh_lightmaps, render_sh_lightmaps};
+    use lightlab_bake::sh_light::ShLighting;
     use lightlab_core::metrics::relmse;
     use lightlab_core::sh_env::{EnvFormat, project_env};
     let mut scene = lightlab_scene::builtin::builtin("prt").unwrap();
@@ -255,7 +256,9 @@ fn sh_lightmaps_match_the_reference_on_prt() {
         };
         let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
         for bands in [3, 4, 5, 6] {
-            let img = render_sh_lightmaps(&sl, &truncated(bands), w, w, 0, spp).unwrap();
+            let img =
+                render_sh_lightmaps(&sl, &ShLighting::uniform(truncated(bands), 0), w, w, 0, spp)
+                    .unwrap();
             let (e1, e3) = (relmse(&img, &r1).unwrap(), relmse(&img, &r3).unwrap());
             println!(
                 "{kind:?}, {bands} bands: relMSE vs 1-bounce reference {e1:.4}, vs 3-bounce {e3:.4}"
@@ -317,6 +320,7 @@ fn sh_lightmap_folder_round_trips() {
 fn textured_transfer_beats_per_vertex_on_the_coarse_mesh() {
     use lightlab_bake::layout::LayoutSettings;
     use lightlab_bake::prt::{bake_sh_lightmaps, render_sh_lightmaps, render_vertex_transfer};
+    use lightlab_bake::sh_light::ShLighting;
     use lightlab_core::metrics::relmse;
     use lightlab_core::sh_env::{EnvFormat, project_env};
     let full = lightlab_scene::builtin::builtin("prt").unwrap();
@@ -359,13 +363,22 @@ fn textured_transfer_beats_per_vertex_on_the_coarse_mesh() {
     };
     let low_accel = Accel::new(&low_scene);
     let (vt, _) = vertex_transfer(&low_scene, &low_accel, &s).unwrap();
-    let per_vertex = render_vertex_transfer(&low_scene, &vt, &light, w, w, 0, 8).unwrap();
+    let per_vertex = render_vertex_transfer(
+        &low_scene,
+        &vt,
+        &ShLighting::uniform(light.clone(), 0),
+        w,
+        w,
+        0,
+        8,
+    )
+    .unwrap();
     let layout = LayoutSettings {
         texels_per_metre: 12.0,
         ..Default::default()
     };
     let sl = bake_sh_lightmaps(&low_scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
-    let textured = render_sh_lightmaps(&sl, &light, w, w, 0, 8).unwrap();
+    let textured = render_sh_lightmaps(&sl, &ShLighting::uniform(light, 0), w, w, 0, 8).unwrap();
     let ev = relmse(&per_vertex, &reference).unwrap();
     let et = relmse(&textured, &reference).unwrap();
     println!(
