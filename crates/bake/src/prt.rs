@@ -572,9 +572,10 @@ pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crat
     })
 }
 
-/// Render per-vertex transfer on the CPU under the incident radiance of `light`: at each hit
-/// the transfer is interpolated from the triangle's vertices (Gouraud, as `prt-vertex` on the
-/// GPU), radiance = albedo × Σ lᵢ tᵢ; the environment where rays escape.
+/// Render per-vertex transfer on the CPU under the incident radiance of `light`: each vertex of
+/// the hit triangle is shaded (E/π = Σ lᵢ tᵢ, the light blended at the vertex) and the results
+/// interpolated (Gouraud, as `prt-vertex` on the GPU), radiance = albedo × max(E/π, 0); the
+/// environment where rays escape.
 pub fn render_vertex_transfer(
     scene: &Scene,
     vt: &VertexTransfer,
@@ -588,11 +589,17 @@ pub fn render_vertex_transfer(
     crate::view::render_camera(scene, width, height, camera, spp, |accel, o, d| {
         let h = accel.intersect(o, d, f32::INFINITY)?;
         let (ii, tri) = (h.prim.instance as usize, h.prim.triangle as usize);
-        let mesh = &scene.meshes[scene.instances[ii].mesh];
-        let mut t = vec![0.0f32; nc];
-        vt.at_hit(scene, ii, tri, h.bary, &mut t);
+        let inst = &scene.instances[ii];
+        let mesh = &scene.meshes[inst.mesh];
+        // Shaded per vertex (light blended at the vertex), then interpolated.
+        let w = [1.0 - h.bary.x - h.bary.y, h.bary.x, h.bary.y];
+        let mut e = Vec3::ZERO;
+        for (k, wk) in w.iter().enumerate() {
+            let v = mesh.indices[tri * 3 + k] as usize;
+            let p = inst.transform.transform_point3(mesh.positions[v]);
+            e += *wk * shade(&vt.instances[ii][v * nc..(v + 1) * nc], &light.at(ii, p));
+        }
         let uv0 = crate::view::hit_uv0(mesh, tri, h.bary);
-        let l = light.at(ii, o + d * h.t);
-        Some(albedo(scene, mesh.material, uv0) * shade(&t, &l).max(Vec3::ZERO))
+        Some(albedo(scene, mesh.material, uv0) * e.max(Vec3::ZERO))
     })
 }

@@ -83,6 +83,10 @@ pub fn all_shaders() -> Vec<(&'static str, &'static str)> {
             "common.wgsl + raster.wgsl",
             crate::raster::SHADER_SOURCE.as_str(),
         ),
+        (
+            "common.wgsl + prt_relit.wgsl",
+            crate::prt::RELIT_SOURCE.as_str(),
+        ),
     ]
 }
 

@@ -116,19 +116,16 @@ pub struct LightmapInput<'a> {
     pub directional: Option<&'a [Image]>,
 }
 
-/// Upload light-map pages as an Rgba16Float array (filterable everywhere) and a clamping
-/// linear sampler; a black 1×1 layer when there are none.
-fn upload_lightmaps(
+/// An Rgba16Float array texture of `layers` layers (at least two: GL decides a texture's target
+/// at creation and makes a one-layer texture a plain 2D texture that cannot be bound as an
+/// array), each filled by `fill(layer, texels)` from zero, and a clamping linear sampler.
+fn upload_array(
     ctx: &GpuContext,
-    lightmap: Option<&LightmapInput>,
     size: [u32; 2],
+    layers: u32,
+    mut fill: impl FnMut(u32, &mut [half::f16]),
 ) -> (wgpu::TextureView, wgpu::Sampler) {
-    // At least two layers: GL decides a texture's target at creation, and makes a one-layer
-    // texture a plain 2D texture that cannot be bound as an array.
-    let pages = lightmap.map_or(0, |lm| lm.pages.len() as u32);
-    let dir = lightmap.and_then(|lm| lm.directional);
-    // Directional pages follow the E/π pages (layer pages + k).
-    let layers = (pages * if dir.is_some() { 2 } else { 1 }).max(2);
+    let layers = layers.max(2);
     let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("light-maps"),
         size: wgpu::Extent3d {
@@ -146,23 +143,7 @@ fn upload_lightmaps(
     let mut data = vec![half::f16::ZERO; (size[0] * size[1] * 4) as usize];
     for layer in 0..layers {
         data.fill(half::f16::ZERO);
-        let page = match (lightmap, dir) {
-            (Some(lm), _) if layer < pages => Some(&lm.pages[layer as usize]),
-            (Some(_), Some(d)) if layer < 2 * pages => d.get((layer - pages) as usize),
-            _ => None,
-        };
-        if let Some(p) = page {
-            for y in 0..p.height {
-                for x in 0..p.width {
-                    let v = p.get(x, y);
-                    let o = ((y * size[0] + x) * 4) as usize;
-                    for c in 0..3 {
-                        data[o + c] = half::f16::from_f32(v[c].clamp(0.0, 65000.0));
-                    }
-                    data[o + 3] = half::f16::ONE;
-                }
-            }
-        }
+        fill(layer, &mut data);
         ctx.queue.write_texture(
             wgpu::TexelCopyTextureInfo {
                 texture: &tex,
@@ -198,6 +179,61 @@ fn upload_lightmaps(
         ..Default::default()
     });
     (view, sampler)
+}
+
+/// Light-map pages (E/π, then the directional ratios at layer pages + k) or textured SH
+/// transfer (layer page·layers + j) in one array; a black array when there are none.
+fn upload_lightmaps(
+    ctx: &GpuContext,
+    lightmap: Option<&LightmapInput>,
+    sh: Option<&crate::prt::ShInput>,
+    size: [u32; 2],
+) -> (wgpu::TextureView, wgpu::Sampler) {
+    let put = |data: &mut [half::f16], w: u32, h: u32, f: &dyn Fn(u32, u32) -> [f32; 4]| {
+        for y in 0..h {
+            for x in 0..w {
+                let v = f(x, y);
+                let o = ((y * size[0] + x) * 4) as usize;
+                for c in 0..4 {
+                    data[o + c] = half::f16::from_f32(v[c].clamp(-65000.0, 65000.0));
+                }
+            }
+        }
+    };
+    if let Some(crate::prt::ShInput {
+        bands,
+        transfer: crate::prt::ShTransfer::Textured { pages },
+        ..
+    }) = sh
+    {
+        let l = crate::prt::layers(*bands);
+        let layers = (pages.len() * l) as u32;
+        return upload_array(ctx, size, layers, |layer, data| {
+            if layer < layers {
+                let p = &pages[layer as usize / l][0];
+                put(data, p.width, p.height, &|x, y| {
+                    crate::prt::textured_texel(pages, *bands, layer as usize, x, y)
+                });
+            }
+        });
+    }
+    let pages = lightmap.map_or(0, |lm| lm.pages.len() as u32);
+    let dir = lightmap.and_then(|lm| lm.directional);
+    // Directional pages follow the E/π pages (layer pages + k).
+    let layers = pages * if dir.is_some() { 2 } else { 1 };
+    upload_array(ctx, size, layers, |layer, data| {
+        let page = match (lightmap, dir) {
+            (Some(lm), _) if layer < pages => Some(&lm.pages[layer as usize]),
+            (Some(_), Some(d)) if layer < 2 * pages => d.get((layer - pages) as usize),
+            _ => None,
+        };
+        if let Some(p) = page {
+            put(data, p.width, p.height, &|x, y| {
+                let v = p.get(x, y);
+                [v.x.max(0.0), v.y.max(0.0), v.z.max(0.0), 1.0]
+            });
+        }
+    })
 }
 
 /// The constant or environment light of the ambient term (Fuchs's ambient uses the light-map;
@@ -348,6 +384,147 @@ pub struct Renderer {
     volume_ranges: Vec<std::ops::Range<u32>>,
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: FrameUniforms,
+    sh: ShResources,
+}
+
+/// GPU data of the SH techniques (dummies when there are none).
+struct ShResources {
+    bands: usize,
+    vertex: wgpu::Buffer,
+    /// Sample points then coefficients; rewritten by `set_sh_light`.
+    light: wgpu::Buffer,
+    index: wgpu::TextureView,
+    relit: wgpu::Buffer,
+    /// The relighting compute pass of compressed transfer: pipeline, bind group, workgroups.
+    relight: Option<(wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2])>,
+}
+
+impl ShResources {
+    fn new(
+        ctx: &GpuContext,
+        sh: Option<&crate::prt::ShInput>,
+        frame: &FrameUniforms,
+        size: [u32; 2],
+        frame_buf: &wgpu::Buffer,
+    ) -> ShResources {
+        use crate::prt::{ShTransfer, pack_representatives, pack_vertex_transfer};
+        let device = &ctx.device;
+        let storage = |label: &str, data: &[[f32; 4]], extra: wgpu::BufferUsages| {
+            let dummy = [[0.0f32; 4]];
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::cast_slice(if data.is_empty() { &dummy } else { data }),
+                usage: wgpu::BufferUsages::STORAGE | extra,
+            })
+        };
+        let bands = sh.map_or(1, |s| s.bands);
+        let vertex = match sh.map(|s| &s.transfer) {
+            Some(ShTransfer::Vertex { instances }) => pack_vertex_transfer(instances, bands),
+            _ => vec![],
+        };
+        let vertex = storage("sh vertex transfer", &vertex, wgpu::BufferUsages::empty());
+        let gp = (frame.sh_groups * frame.sh_points) as usize;
+        let light = vec![[0.0f32; 4]; gp + gp * 4 * frame.sh_layers as usize];
+        let light = storage("sh light", &light, wgpu::BufferUsages::COPY_DST);
+        let relit = vec![[0.0f32; 4]; gp * frame.sh_reps as usize];
+        let relit = storage("sh relit", &relit, wgpu::BufferUsages::empty());
+        let (pages, reps): (&[crate::prt::IndexPage], &[f32]) = match sh.map(|s| &s.transfer) {
+            Some(ShTransfer::Compressed {
+                pages,
+                representatives,
+                ..
+            }) => (pages, representatives),
+            _ => (&[], &[]),
+        };
+        let isize = if pages.is_empty() { [1, 1] } else { size };
+        let tex = texture(
+            device,
+            "sh index",
+            isize[0],
+            isize[1],
+            (pages.len() as u32).max(2),
+            wgpu::TextureFormat::R32Uint,
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        );
+        for (k, p) in pages.iter().enumerate() {
+            ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &tex,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: k as u32,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                bytemuck::cast_slice(&p.indices),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(p.width * 4),
+                    rows_per_image: Some(p.height),
+                },
+                wgpu::Extent3d {
+                    width: p.width,
+                    height: p.height,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+        let index = array_view(&tex);
+        let relight = (!pages.is_empty()).then(|| {
+            let reps = storage(
+                "sh representatives",
+                &pack_representatives(reps, bands),
+                wgpu::BufferUsages::empty(),
+            );
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("prt relit"),
+                source: wgpu::ShaderSource::Wgsl(crate::prt::RELIT_SOURCE.as_str().into()),
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("sh relight"),
+                layout: None,
+                module: &module,
+                entry_point: Some("relight_cs"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("sh relight"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: frame_buf.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: reps.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: light.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: relit.as_entire_binding(),
+                    },
+                ],
+            });
+            let wg = ((gp * frame.sh_reps as usize).div_ceil(64) as u32).max(1);
+            let x = wg.min(65535);
+            (pipeline, group, [x, wg.div_ceil(x)])
+        });
+        ShResources {
+            bands,
+            vertex,
+            light,
+            index,
+            relit,
+            relight,
+        }
+    }
 }
 
 fn texture(
@@ -458,6 +635,28 @@ impl Renderer {
         settings: RasterSettings,
         lightmap: Option<&LightmapInput>,
     ) -> Result<Renderer, RasterError> {
+        Self::build(ctx, scene, settings, lightmap, None)
+    }
+
+    /// A renderer whose ambient term is diffuse × SH transfer · SH light (the PRT techniques,
+    /// `crate::prt`). The light is black until [`Renderer::set_sh_light`].
+    pub fn with_sh(
+        ctx: &GpuContext,
+        scene: &Scene,
+        settings: RasterSettings,
+        sh: &crate::prt::ShInput,
+    ) -> Result<Renderer, RasterError> {
+        sh.validate(scene).map_err(RasterError::Settings)?;
+        Self::build(ctx, scene, settings, None, Some(sh))
+    }
+
+    fn build(
+        ctx: &GpuContext,
+        scene: &Scene,
+        settings: RasterSettings,
+        lightmap: Option<&LightmapInput>,
+        sh: Option<&crate::prt::ShInput>,
+    ) -> Result<Renderer, RasterError> {
         let s = &settings;
         if let Some(lm) = lightmap
             && (lm.pages.is_empty()
@@ -500,21 +699,28 @@ impl Renderer {
             .ok_or(RasterError::NoCamera(s.camera))?;
         let device = &ctx.device;
         // Pages may differ in size: the array takes the largest, each page's UVs are scaled.
-        let lm_size = lightmap.map_or([1, 1], |lm| {
-            [
-                lm.pages.iter().map(|p| p.width).max().unwrap_or(1),
-                lm.pages.iter().map(|p| p.height).max().unwrap_or(1),
-            ]
-        });
-        let lm_rects: Option<Vec<Option<UvRect>>> = lightmap.map(|lm| {
-            lm.rects
+        let (page_sizes, page_rects): (Vec<[u32; 2]>, Option<&[Option<UvRect>]>) =
+            match (lightmap, sh) {
+                (Some(lm), _) => (
+                    lm.pages.iter().map(|p| [p.width, p.height]).collect(),
+                    Some(lm.rects),
+                ),
+                (None, Some(sh)) if sh.mode() != 2 => (sh.page_sizes(), Some(sh.rects)),
+                _ => (vec![], None),
+            };
+        let lm_size = [
+            page_sizes.iter().map(|p| p[0]).max().unwrap_or(1),
+            page_sizes.iter().map(|p| p[1]).max().unwrap_or(1),
+        ];
+        let lm_rects: Option<Vec<Option<UvRect>>> = page_rects.map(|rects| {
+            rects
                 .iter()
                 .map(|r| {
                     r.map(|r| {
-                        let p = &lm.pages[r.page as usize];
+                        let p = page_sizes[r.page as usize];
                         let k = [
-                            p.width as f32 / lm_size[0] as f32,
-                            p.height as f32 / lm_size[1] as f32,
+                            p[0] as f32 / lm_size[0] as f32,
+                            p[1] as f32 / lm_size[1] as f32,
                         ];
                         UvRect {
                             page: r.page,
@@ -631,6 +837,24 @@ impl Renderer {
                 .map_or(0, |lm| if lm.directional.is_some() { 4 } else { 0 }),
             lightmap_pages: lightmap.map_or(0, |lm| lm.pages.len() as u32),
             lightmap_size: [lm_size[0] as f32, lm_size[1] as f32],
+            sh_mode: sh.map_or(0, |sh| sh.mode()),
+            sh_layers: sh.map_or(0, |sh| crate::prt::layers(sh.bands) as u32),
+            sh_points: sh.map_or(0, |sh| sh.points as u32),
+            sh_per_object: sh.is_some_and(|sh| sh.per_object) as u32,
+            sh_filter: match sh.map(|sh| &sh.transfer) {
+                Some(crate::prt::ShTransfer::Compressed { filter, .. }) => filter.code(),
+                _ => 0,
+            },
+            sh_reps: match sh.map(|sh| &sh.transfer) {
+                Some(crate::prt::ShTransfer::Compressed {
+                    representatives, ..
+                }) => (representatives.len() / (sh.map_or(1, |s| s.bands * s.bands))) as u32,
+                _ => 0,
+            },
+            sh_coeff_base: sh.map_or(0, |sh| {
+                (sh.groups(scene.instances.len()) * sh.points) as u32
+            }),
+            sh_groups: sh.map_or(0, |sh| sh.groups(scene.instances.len()) as u32),
         };
         let frame_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
@@ -740,6 +964,14 @@ impl Renderer {
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                     count: None,
                 },
+                buf(5, ro, false),
+                buf(6, ro, false),
+                tex_entry(
+                    7,
+                    wgpu::TextureSampleType::Uint,
+                    wgpu::TextureViewDimension::D2Array,
+                ),
+                buf(8, ro, false),
             ],
         });
         let d2 = wgpu::TextureViewDimension::D2;
@@ -892,7 +1124,8 @@ impl Renderer {
             ],
         });
         let (sd_view, sl_view) = (array_view(&sd), array_view(&sl));
-        let (lm_view, lm_sampler) = upload_lightmaps(ctx, lightmap, lm_size);
+        let (lm_view, lm_sampler) = upload_lightmaps(ctx, lightmap, sh, lm_size);
+        let sh_res = ShResources::new(ctx, sh, &frame, lm_size, &frame_buf);
         let group2 = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shadow maps"),
             layout: &bgl2,
@@ -902,6 +1135,10 @@ impl Renderer {
                 entry(2, wgpu::BindingResource::TextureView(&sl_view)),
                 entry(3, wgpu::BindingResource::TextureView(&lm_view)),
                 entry(4, wgpu::BindingResource::Sampler(&lm_sampler)),
+                entry(5, sh_res.vertex.as_entire_binding()),
+                entry(6, sh_res.light.as_entire_binding()),
+                entry(7, wgpu::BindingResource::TextureView(&sh_res.index)),
+                entry(8, sh_res.relit.as_entire_binding()),
             ],
         });
         let group3 = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -967,7 +1204,32 @@ impl Renderer {
             volume_ranges: vec![],
             queries,
             frame,
+            sh: sh_res,
         })
+    }
+
+    /// The SH light of the next frame: `points` (groups × sample points) and per point its
+    /// bands² RGB coefficients (`lightlab_bake::sh_light::ShLighting`, flattened).
+    pub fn set_sh_light(
+        &mut self,
+        ctx: &GpuContext,
+        points: &[Vec3],
+        coeffs: &[Vec3],
+    ) -> Result<(), RasterError> {
+        let gp = (self.frame.sh_groups * self.frame.sh_points) as usize;
+        let nc = self.sh.bands * self.sh.bands;
+        if self.frame.sh_mode == 0 || points.len() != gp || coeffs.len() != gp * nc {
+            return Err(RasterError::Settings(format!(
+                "the SH light needs {gp} sample points and {} coefficients (got {} and {})",
+                gp * nc,
+                points.len(),
+                coeffs.len()
+            )));
+        }
+        let data = crate::prt::pack_light(points, coeffs, self.sh.bands);
+        ctx.queue
+            .write_buffer(&self.sh.light, 0, bytemuck::cast_slice(&data));
+        Ok(())
     }
 
     /// Number of scene lights rendered.
@@ -1082,7 +1344,7 @@ impl Renderer {
         pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
         pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         let mut current: Option<bool> = None;
-        for d in &self.scene.draws {
+        for (ii, d) in self.scene.draws.iter().enumerate() {
             if li.is_some_and(|li| !self.reaches(li, &d.bounds)) {
                 continue;
             }
@@ -1092,7 +1354,12 @@ impl Renderer {
                 current = Some(m.double_sided);
             }
             pass.set_bind_group(1, &m.bind_group, &[]);
-            pass.draw_indexed(d.first_index..d.first_index + d.index_count, 0, 0..1);
+            // The instance index is the scene instance (per-object SH light groups).
+            pass.draw_indexed(
+                d.first_index..d.first_index + d.index_count,
+                0,
+                ii as u32..ii as u32 + 1,
+            );
         }
     }
 
@@ -1235,6 +1502,20 @@ impl Renderer {
         }
         let mut labels = vec![];
         let mut enc = ctx.device.create_command_encoder(&Default::default());
+        if let Some((pipeline, group, wg)) = &self.sh.relight {
+            let ts = self.timestamps(&mut labels, "sh relight");
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("sh relight"),
+                timestamp_writes: ts.map(|t| wgpu::ComputePassTimestampWrites {
+                    query_set: t.query_set,
+                    beginning_of_pass_write_index: t.beginning_of_pass_write_index,
+                    end_of_pass_write_index: t.end_of_pass_write_index,
+                }),
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(wg[0], wg[1], 1);
+        }
         if self.settings.shadows.map() {
             self.shadow_map_passes(&mut enc, &mut labels);
         }
@@ -1874,6 +2155,20 @@ impl Renderer {
         }
         let mut labels = vec![];
         let mut enc = ctx.device.create_command_encoder(&Default::default());
+        if let Some((pipeline, group, wg)) = &self.sh.relight {
+            let ts = self.timestamps(&mut labels, "sh relight");
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("sh relight"),
+                timestamp_writes: ts.map(|t| wgpu::ComputePassTimestampWrites {
+                    query_set: t.query_set,
+                    beginning_of_pass_write_index: t.beginning_of_pass_write_index,
+                    end_of_pass_write_index: t.end_of_pass_write_index,
+                }),
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(wg[0], wg[1], 1);
+        }
         if self.settings.shadows.map() {
             self.shadow_map_passes(&mut enc, &mut labels);
         }

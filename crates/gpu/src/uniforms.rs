@@ -28,6 +28,19 @@ pub struct FrameUniforms {
     /// Number of E/π pages: directional page k is layer `lightmap_pages + k`.
     pub lightmap_pages: u32,
     pub lightmap_size: [f32; 2],
+    /// SH transfer: 0 off, 1 textured, 2 per vertex, 3 compressed.
+    pub sh_mode: u32,
+    /// vec4s per transfer vector: ⌈bands²/4⌉.
+    pub sh_layers: u32,
+    /// Sample points per group.
+    pub sh_points: u32,
+    /// 1: one group per instance; 0: one for the scene.
+    pub sh_per_object: u32,
+    /// Compressed reads: 0 nearest, 1 bilinear, 2 Fuchs's 4-tap.
+    pub sh_filter: u32,
+    pub sh_reps: u32,
+    pub sh_coeff_base: u32,
+    pub sh_groups: u32,
 }
 
 /// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional.
@@ -122,7 +135,15 @@ mod tests {
                     shadow_size,
                     lightmap_mode,
                     lightmap_pages,
-                    lightmap_size
+                    lightmap_size,
+                    sh_mode,
+                    sh_layers,
+                    sh_points,
+                    sh_per_object,
+                    sh_filter,
+                    sh_reps,
+                    sh_coeff_base,
+                    sh_groups
                 ),
             ),
             (

@@ -29,6 +29,22 @@ struct FrameUniforms {
     lightmap_pages: u32,
     // Light-map page size in texels.
     lightmap_size: vec2<f32>,
+    // SH transfer (PRT techniques): 0 off; 1 textured (coefficients 4j..4j+3 in light-map layer
+    // page·sh_layers + j); 2 per vertex; 3 compressed (index map + relit representatives).
+    sh_mode: u32,
+    // RGBA layers (vec4s) per transfer vector: ⌈bands²/4⌉.
+    sh_layers: u32,
+    // Incident-light sample points per group; groups are instances (1) or the scene (0).
+    sh_points: u32,
+    sh_per_object: u32,
+    // Compressed reads: 0 nearest, 1 bilinear of relit representatives, 2 Fuchs's 4-tap.
+    sh_filter: u32,
+    // Representatives of the compressed set.
+    sh_reps: u32,
+    // Where the light coefficients start in `sh_light` (after the sample points).
+    sh_coeff_base: u32,
+    // Number of groups.
+    sh_groups: u32,
 }
 
 // One light. kind: 0 point, 1 spot, 2 directional. Spot cones as cosines.

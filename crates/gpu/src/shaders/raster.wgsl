@@ -23,6 +23,13 @@
 // Light-maps (E/π): one layer per page; UV1 carries the page in its integer part.
 @group(2) @binding(3) var lightmap: texture_2d_array<f32>;
 @group(2) @binding(4) var lightmap_sampler: sampler;
+// SH transfer: per-vertex vectors (sh_layers vec4s per vertex), the frame's light (sample points,
+// then per group and point sh_layers·4 RGB coefficients), the compressed index map and the
+// representatives relit this frame ((group·points + point)·reps + r).
+@group(2) @binding(5) var<storage, read> sh_vertex: array<vec4<f32>>;
+@group(2) @binding(6) var<storage, read> sh_light: array<vec4<f32>>;
+@group(2) @binding(7) var sh_index: texture_2d_array<u32>;
+@group(2) @binding(8) var<storage, read> sh_relit: array<vec4<f32>>;
 
 @group(3) @binding(0) var gb_diffuse: texture_2d<f32>;
 @group(3) @binding(1) var gb_normal: texture_2d<f32>;
@@ -44,10 +51,18 @@ struct VertexOut {
     @location(2) tangent: vec4<f32>,
     @location(3) uv0: vec2<f32>,
     @location(4) uv1: vec2<f32>,
+    // The draw's scene instance.
+    @location(5) @interpolate(flat) instance: u32,
+    // Per-vertex PRT: E/π shaded at the vertex (Gouraud).
+    @location(6) sh_radiance: vec3<f32>,
 }
 
 @vertex
-fn scene_vs(v: VertexIn) -> VertexOut {
+fn scene_vs(
+    v: VertexIn,
+    @builtin(vertex_index) vi: u32,
+    @builtin(instance_index) ii: u32,
+) -> VertexOut {
     var o: VertexOut;
     o.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
     o.world = v.position;
@@ -55,7 +70,115 @@ fn scene_vs(v: VertexIn) -> VertexOut {
     o.tangent = v.tangent;
     o.uv0 = v.uv0;
     o.uv1 = v.uv1;
+    o.instance = ii;
+    o.sh_radiance = vec3<f32>(0.0);
+    if frame.sh_mode == 2u {
+        let g = sh_group(ii);
+        let w = sh_weights(g, v.position);
+        for (var j = 0u; j < frame.sh_layers; j++) {
+            o.sh_radiance += sh_dot4(g, w, j, sh_vertex[vi * frame.sh_layers + j]);
+        }
+    }
     return o;
+}
+
+// ---- SH transfer (PRT) -------------------------------------------------------------------------
+
+fn sh_group(instance: u32) -> u32 {
+    return select(0u, instance, frame.sh_per_object == 1u);
+}
+
+// Blend weights of the group's sample points at p: ∝ 1/distance, summing to 1
+// (lightlab_bake::sh_light::point_weights).
+fn sh_weights(g: u32, p: vec3<f32>) -> array<f32, 6> {
+    var w = array<f32, 6>(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    var total = 0.0;
+    for (var k = 0u; k < frame.sh_points; k++) {
+        let q = sh_light[g * frame.sh_points + k].xyz;
+        w[k] = 1.0 / max(length(p - q), 1e-6);
+        total += w[k];
+    }
+    for (var k = 0u; k < frame.sh_points; k++) {
+        w[k] /= total;
+    }
+    return w;
+}
+
+// Σ tᵢ·lᵢ over coefficients 4j..4j+3, the light blended from the group's sample points.
+fn sh_dot4(g: u32, w: array<f32, 6>, j: u32, t: vec4<f32>) -> vec3<f32> {
+    var e = vec3<f32>(0.0);
+    for (var k = 0u; k < frame.sh_points; k++) {
+        let b = frame.sh_coeff_base + (g * frame.sh_points + k) * 4u * frame.sh_layers + 4u * j;
+        e += w[k] * (t.x * sh_light[b].xyz + t.y * sh_light[b + 1u].xyz
+            + t.z * sh_light[b + 2u].xyz + t.w * sh_light[b + 3u].xyz);
+    }
+    return e;
+}
+
+// Textured transfer (SH light-maps, textured PRT): bilinear coefficient reads.
+fn sh_textured(uv1: vec2<f32>, g: u32, w: array<f32, 6>) -> vec3<f32> {
+    let page = floor(uv1.x);
+    let uv = vec2<f32>(uv1.x - page, uv1.y);
+    var e = vec3<f32>(0.0);
+    for (var j = 0u; j < frame.sh_layers; j++) {
+        let l = i32(u32(page) * frame.sh_layers + j);
+        e += sh_dot4(g, w, j, textureSampleLevel(lightmap, lightmap_sampler, uv, l, 0.0));
+    }
+    return e;
+}
+
+// One compressed texel: its representative, relit this frame, blended over sample points.
+fn sh_texel(c: vec2<i32>, page: i32, g: u32, w: array<f32, 6>) -> vec3<f32> {
+    let size = vec2<i32>(textureDimensions(sh_index));
+    let cc = clamp(c, vec2<i32>(0), size - 1);
+    let r = textureLoad(sh_index, cc, page, 0).x;
+    var e = vec3<f32>(0.0);
+    for (var k = 0u; k < frame.sh_points; k++) {
+        e += w[k] * sh_relit[(g * frame.sh_points + k) * frame.sh_reps + r].xyz;
+    }
+    return e;
+}
+
+// Compressed SH light-maps (Fuchs §5.6) with the filters of §5.8: nearest; bilinear of the
+// relit representatives (what hardware filtering would do to decompressed data); Fuchs's 4-tap
+// average of nearest decompressions at ±¼ texel.
+fn sh_compressed(uv1: vec2<f32>, g: u32, w: array<f32, 6>) -> vec3<f32> {
+    let page = floor(uv1.x);
+    let layer = i32(page);
+    let size = vec2<f32>(textureDimensions(sh_index));
+    let x = vec2<f32>(uv1.x - page, uv1.y) * size;
+    if frame.sh_filter == 1u {
+        let y = x - 0.5;
+        let i = vec2<i32>(floor(y));
+        let f = y - floor(y);
+        let a = sh_texel(i, layer, g, w);
+        let b = sh_texel(i + vec2<i32>(1, 0), layer, g, w);
+        let c = sh_texel(i + vec2<i32>(0, 1), layer, g, w);
+        let d = sh_texel(i + vec2<i32>(1, 1), layer, g, w);
+        return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+    }
+    if frame.sh_filter == 2u {
+        var e = vec3<f32>(0.0);
+        for (var k = 0; k < 4; k++) {
+            let o = vec2<f32>(f32(k & 1) - 0.5, f32(k >> 1u) - 0.5) * 0.5;
+            e += 0.25 * sh_texel(vec2<i32>(floor(x + o)), layer, g, w);
+        }
+        return e;
+    }
+    return sh_texel(vec2<i32>(floor(x)), layer, g, w);
+}
+
+// E/π of the SH techniques at a fragment.
+fn sh_ambient(in: VertexOut) -> vec3<f32> {
+    if frame.sh_mode == 2u {
+        return in.sh_radiance;
+    }
+    let g = sh_group(in.instance);
+    let w = sh_weights(g, in.world);
+    if frame.sh_mode == 3u {
+        return sh_compressed(in.uv1, g, w);
+    }
+    return sh_textured(in.uv1, g, w);
 }
 
 fn uv_for(i: u32, in: VertexOut) -> vec2<f32> {
@@ -211,7 +334,11 @@ fn directional_weights(n: vec3<f32>) -> vec3<f32> {
 }
 
 // `nv`: the interpolated vertex normal (before the normal map), turned like s.n.
-fn ambient(s: Surface, uv1: vec2<f32>, nv: vec3<f32>) -> vec3<f32> {
+fn ambient(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
+    let uv1 = in.uv1;
+    if frame.sh_mode != 0u {
+        return s.diffuse * max(sh_ambient(in), vec3<f32>(0.0));
+    }
     // Fuchs §3.4: diffuse × light-map (the light-map holds E/π).
     if (frame.lightmap_mode & 3u) != 0u {
         var e = lightmap_read(uv1, 0u);
@@ -320,7 +447,7 @@ fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
 fn ambient_fs(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     alpha_test(in);
     let s = surface(in, front);
-    return vec4<f32>(ambient(s, in.uv1, vertex_normal(in, front)) + emission(in), 1.0);
+    return vec4<f32>(ambient(s, in, vertex_normal(in, front)) + emission(in), 1.0);
 }
 
 // One light's contribution, blended additively (one pass per light, Fuchs §4.4).
@@ -349,7 +476,7 @@ fn gbuffer_fs(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     alpha_test(in);
     let s = surface(in, front);
     var o: GBufferOut;
-    o.accum = vec4<f32>(ambient(s, in.uv1, vertex_normal(in, front)) + emission(in), 1.0);
+    o.accum = vec4<f32>(ambient(s, in, vertex_normal(in, front)) + emission(in), 1.0);
     o.diffuse = vec4<f32>(s.diffuse, s.f0d);
     o.normal = vec4<f32>(s.n, s.roughness);
     o.specular = vec4<f32>(s.f0, f32(s.model) + min(s.transmission, 0.99));
