@@ -17,6 +17,7 @@ pub mod prt;
 pub mod radiosity;
 pub mod repair;
 pub mod seams;
+pub mod sh_compress;
 pub mod sh_light;
 pub mod texels;
 pub mod view;

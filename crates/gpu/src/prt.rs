@@ -12,7 +12,7 @@
 //! Layout on the GPU: a transfer vector is ⌈n²/4⌉ vec4s ("layers"); textured transfer lives in the
 //! light-map array texture (Rgba16Float) at layer page·layers + j; per-vertex transfer in a
 //! storage buffer (f32, vertex-major in the order of `GpuScene`'s vertex buffer); compressed
-//! transfer as an R32Uint index array (one layer per page) and a representative buffer.
+//! transfer as an R16Uint index array (one layer per page) and a representative buffer.
 
 use crate::gpu_scene::UvRect;
 
@@ -151,6 +151,9 @@ impl ShInput<'_> {
                     return Err("representatives must be a non-empty multiple of n²".into());
                 }
                 let count = (representatives.len() / nc) as u32;
+                if count > 65536 {
+                    return Err("at most 65536 representatives (16-bit indices)".into());
+                }
                 for (k, p) in pages.iter().enumerate() {
                     if p.width == 0
                         || p.height == 0

@@ -443,10 +443,11 @@ impl ShResources {
             isize[0],
             isize[1],
             (pages.len() as u32).max(2),
-            wgpu::TextureFormat::R32Uint,
+            wgpu::TextureFormat::R16Uint,
             wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         );
         for (k, p) in pages.iter().enumerate() {
+            let idx: Vec<u16> = p.indices.iter().map(|&i| i as u16).collect();
             ctx.queue.write_texture(
                 wgpu::TexelCopyTextureInfo {
                     texture: &tex,
@@ -458,10 +459,10 @@ impl ShResources {
                     },
                     aspect: wgpu::TextureAspect::All,
                 },
-                bytemuck::cast_slice(&p.indices),
+                bytemuck::cast_slice(&idx),
                 wgpu::TexelCopyBufferLayout {
                     offset: 0,
-                    bytes_per_row: Some(p.width * 4),
+                    bytes_per_row: Some(p.width * 2),
                     rows_per_image: Some(p.height),
                 },
                 wgpu::Extent3d {

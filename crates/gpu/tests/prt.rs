@@ -10,10 +10,11 @@ use lightlab_bake::prt::{
     ShLightmaps, TransferKind, TransferSettings, bake_sh_lightmaps, render_sh_lightmaps,
     render_vertex_transfer, vertex_transfer,
 };
+use lightlab_bake::sh_compress::{CompressSettings, Filter, compress, render_compressed};
 use lightlab_bake::sh_light::{SamplePoints, ShLightSettings, ShLighting};
 use lightlab_core::image::Image;
 use lightlab_core::metrics::relmse;
-use lightlab_gpu::prt::{ShInput, ShTransfer};
+use lightlab_gpu::prt::{IndexPage, ShFilter, ShInput, ShTransfer};
 use lightlab_gpu::raster::{Ambient, RasterSettings, Renderer, ShadowMethod};
 use lightlab_gpu::{GpuContext, test_context};
 use lightlab_scene::{Light, LightKind, Scene};
@@ -126,6 +127,54 @@ fn gpu_sh_techniques_match_the_cpu_views() {
         assert!(e < 0.008, "textured {points:?}: relMSE {e}");
         assert!((ratio - 1.0).abs().max_element() < 0.003, "{ratio:?}");
         assert!(gpu.mean().min_element() > 0.02, "lit: {:?}", gpu.mean());
+    }
+
+    // Compressed SH light-maps: nearest, bilinear of relit representatives, Fuchs's 4-tap.
+    let c = compress(
+        &sl,
+        &CompressSettings {
+            representatives: 256,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let index_pages: Vec<IndexPage> = c
+        .pages
+        .iter()
+        .map(|p| IndexPage {
+            width: p.width,
+            height: p.height,
+            indices: p.indices.clone(),
+        })
+        .collect();
+    let light = lighting(&sl.scene, s.bands, SamplePoints::PerObject);
+    let cpu_sl = ShLightmaps {
+        scene: no_background(&sl.scene),
+        ..sl.clone()
+    };
+    for (gf, cf) in [
+        (ShFilter::Nearest, Filter::Nearest),
+        (ShFilter::Bilinear, Filter::Bilinear),
+        (ShFilter::FourTap, Filter::FourTap),
+    ] {
+        let input = ShInput {
+            bands: s.bands,
+            transfer: ShTransfer::Compressed {
+                pages: &index_pages,
+                representatives: &c.representatives,
+                filter: gf,
+            },
+            rects: &rects,
+            per_object: true,
+            points: 6,
+        };
+        let gpu = gpu_render(&ctx, &cpu_sl.scene, &input, &light);
+        let cpu = render_compressed(&cpu_sl, &c, &light, cf, N, N, 0, 9).unwrap();
+        let e = relmse(&gpu, &cpu).unwrap();
+        let ratio = gpu.mean() / cpu.mean();
+        println!("compressed, {gf:?}: GPU vs CPU relMSE {e:.5}, mean ratio {ratio:?}");
+        assert!(e < 0.008, "compressed {gf:?}: relMSE {e}");
+        assert!((ratio - 1.0).abs().max_element() < 0.003, "{ratio:?}");
     }
 
     // Per-vertex transfer on the original scene (no light-map unwrap needed).
