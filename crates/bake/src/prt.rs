@@ -135,14 +135,17 @@ fn ray_eps(p: Vec3) -> f32 {
     2e-5 * (1.0 + p.abs().max_element())
 }
 
-/// Fraction of the way from a vertex to the mean centroid of its triangles where its transfer
-/// is sampled. A vertex on the line where a wall meets a floor would otherwise cast rays along
-/// the other surface's plane, slip past it and see the sky behind it, and its (too bright)
-/// transfer would be interpolated over the whole triangle and gathered by every bounce.
+/// Fraction of the way from a vertex to the centroid of one of its triangles where its
+/// transfer is sampled. A vertex on the line where a wall meets a floor would otherwise cast
+/// rays along the other surface's plane, slip past it and see the sky behind it, and its (too
+/// bright) transfer would be interpolated over the whole triangle and gathered by every bounce.
 const VERTEX_INSET: f32 = 0.02;
 
-/// World-space (position, normal) of every vertex, per instance (positions inset towards the
-/// vertex's triangles, see [`VERTEX_INSET`]).
+/// World-space (position, normal) of every vertex, per instance. The position is moved
+/// [`VERTEX_INSET`] towards the centroid of the vertex's triangle that best faces its normal,
+/// so it lies *on* that triangle (and is lifted off it like a texel): a point between the
+/// vertex and the mean centroid of all its triangles would lie under a convex surface and
+/// see only the mesh's inside.
 fn world_vertices(scene: &Scene) -> Vec<Vec<(Vec3, Vec3)>> {
     scene
         .instances
@@ -150,30 +153,45 @@ fn world_vertices(scene: &Scene) -> Vec<Vec<(Vec3, Vec3)>> {
         .map(|inst| {
             let m = &scene.meshes[inst.mesh];
             let nm = inst.normal_matrix();
-            let mut centre = vec![(Vec3::ZERO, 0u32); m.positions.len()];
+            let world: Vec<Vec3> = m
+                .positions
+                .iter()
+                .map(|p| inst.transform.transform_point3(*p))
+                .collect();
+            let normal = |v: usize| {
+                m.normals
+                    .get(v)
+                    .map_or(Vec3::Y, |n| (nm * *n).normalize_or(Vec3::Y))
+            };
+            // Per vertex: (best alignment, triangle centroid, face normal).
+            let mut best = vec![(f32::NEG_INFINITY, Vec3::ZERO, Vec3::ZERO); world.len()];
             for t in m.indices.chunks_exact(3) {
-                let c = (m.positions[t[0] as usize]
-                    + m.positions[t[1] as usize]
-                    + m.positions[t[2] as usize])
-                    / 3.0;
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| world[i as usize]);
+                let ng = (b - a).cross(c - a);
+                if ng.length_squared() <= 0.0 {
+                    continue;
+                }
+                let ng = ng.normalize();
+                let centroid = (a + b + c) / 3.0;
                 for &v in t {
-                    centre[v as usize].0 += c;
-                    centre[v as usize].1 += 1;
+                    let al = ng.dot(normal(v as usize));
+                    // A face whose winding disagrees with the normal still works turned over.
+                    let (al, ngo) = if al < 0.0 { (-al, -ng) } else { (al, ng) };
+                    if al > best[v as usize].0 {
+                        best[v as usize] = (al, centroid, ngo);
+                    }
                 }
             }
-            (0..m.positions.len())
+            (0..world.len())
                 .map(|v| {
-                    let (sum, count) = centre[v];
-                    let local = if count > 0 {
-                        m.positions[v].lerp(sum / count as f32, VERTEX_INSET)
+                    let n = normal(v);
+                    let (al, centroid, ng) = best[v];
+                    let p = if al.is_finite() {
+                        let q = world[v].lerp(centroid, VERTEX_INSET);
+                        q + ng * ray_eps(q)
                     } else {
-                        m.positions[v]
+                        world[v]
                     };
-                    let p = inst.transform.transform_point3(local);
-                    let n = m
-                        .normals
-                        .get(v)
-                        .map_or(Vec3::Y, |n| (nm * *n).normalize_or(Vec3::Y));
                     (p, n)
                 })
                 .collect()

@@ -291,6 +291,7 @@ impl CompressedSh {
 
 /// Render compressed SH light-maps on the CPU (the reference view of `shl-compressed`) under the
 /// light of `light`'s sample points (relit per group and point, blended at the hit).
+#[allow(clippy::too_many_arguments)]
 pub fn render_compressed(
     sl: &ShLightmaps,
     c: &CompressedSh,

@@ -153,17 +153,44 @@ pub struct ShLighting {
     pub group: Vec<usize>,
 }
 
-impl ShLighting {
-    /// Project the scene's lights for this frame. `rotations[i]`, when given, is the rotation of
-    /// instance i since its transfer was baked: its light is turned into the baked frame.
-    pub fn new(scene: &Scene, s: &ShLightSettings, rotations: Option<&[DMat3]>) -> ShLighting {
+/// Per-frame projection with the static part (the environment map) projected once.
+#[derive(Clone, Debug)]
+pub struct ShProjector {
+    pub settings: ShLightSettings,
+    env: Vec<DVec3>,
+}
+
+impl ShProjector {
+    pub fn new(scene: &Scene, s: &ShLightSettings) -> ShProjector {
         let env = if s.environment {
             project_environment(scene, s.bands)
         } else {
             vec![DVec3::ZERO; sh::num_coeffs(s.bands)]
         };
+        ShProjector { settings: *s, env }
+    }
+
+    /// This frame's lighting (the scene's current lights and object rotations).
+    pub fn project(&self, scene: &Scene, rotations: Option<&[DMat3]>) -> ShLighting {
+        ShLighting::with_environment(scene, &self.settings, &self.env, rotations)
+    }
+}
+
+impl ShLighting {
+    /// Project the scene's lights for this frame. `rotations[i]`, when given, is the rotation of
+    /// instance i since its transfer was baked: its light is turned into the baked frame.
+    pub fn new(scene: &Scene, s: &ShLightSettings, rotations: Option<&[DMat3]>) -> ShLighting {
+        ShProjector::new(scene, s).project(scene, rotations)
+    }
+
+    fn with_environment(
+        scene: &Scene,
+        s: &ShLightSettings,
+        env: &[DVec3],
+        rotations: Option<&[DMat3]>,
+    ) -> ShLighting {
         let project = |q: Vec3| -> Vec<DVec3> {
-            let mut c = env.clone();
+            let mut c = env.to_vec();
             if s.punctual {
                 for (o, p) in c.iter_mut().zip(project_punctual(scene, s.bands, q)) {
                     *o += p;

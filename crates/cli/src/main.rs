@@ -6,6 +6,7 @@
 mod bake_cmd;
 mod bench;
 mod demo;
+mod prt_cmd;
 mod raster_cmd;
 mod render;
 mod sh_cmd;
@@ -115,6 +116,8 @@ enum Command {
         /// (written by `lightlab bake`) instead of baking them first.
         #[arg(long)]
         baked: Option<PathBuf>,
+        #[command(flatten)]
+        sh: prt_cmd::ShArgs,
     },
     /// Spherical harmonics of environment maps: coefficients and irradiance maps.
     #[command(subcommand)]
@@ -260,6 +263,7 @@ fn run(cli: Cli) -> Result<()> {
             raster,
             bake,
             baked,
+            sh,
         } => {
             if matches!(what, bench::BenchKind::Bake) {
                 return bench::bench_bake(&scene, &bake, json);
@@ -274,6 +278,7 @@ fn run(cli: Cli) -> Result<()> {
                     &frame,
                     &bake,
                     baked.as_deref(),
+                    &sh,
                     json,
                 );
             }

@@ -225,6 +225,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// `lightlab bench frame`: milliseconds per pass of a GPU technique.
+#[allow(clippy::too_many_arguments)]
 pub fn bench_frame(
     scene: &mut Scene,
     technique: &str,
@@ -232,14 +233,17 @@ pub fn bench_frame(
     f: &FrameBenchArgs,
     bake: &crate::bake_cmd::BakeArgs,
     baked: Option<&std::path::Path>,
+    sh: &crate::prt_cmd::ShArgs,
     json: bool,
 ) -> Result<()> {
     let lightmapped = crate::bake_cmd::LIGHTMAP_TECHNIQUES.contains(&technique);
+    let sh_technique = crate::prt_cmd::SH_TECHNIQUES.contains(&technique);
     anyhow::ensure!(
-        RASTER_TECHNIQUES.contains(&technique) || lightmapped,
-        "bench frame needs a GPU technique ({}, {})",
+        RASTER_TECHNIQUES.contains(&technique) || lightmapped || sh_technique,
+        "bench frame needs a GPU technique ({}, {}, {})",
         RASTER_TECHNIQUES.join(", "),
-        crate::bake_cmd::LIGHTMAP_TECHNIQUES.join(", ")
+        crate::bake_cmd::LIGHTMAP_TECHNIQUES.join(", "),
+        crate::prt_cmd::SH_TECHNIQUES.join(", ")
     );
     anyhow::ensure!(
         (1..=10_000).contains(&f.frames),
@@ -264,9 +268,17 @@ pub fn bench_frame(
         scene.lights.truncate(n);
     }
     let ctx = context()?;
+    // SH techniques re-project the scene's lights every frame (CPU time reported).
+    let mut projector = None;
     let mut r = if lightmapped {
         let lm = crate::bake_cmd::lightmaps_for(scene, technique, baked, bake)?;
         crate::bake_cmd::lightmap_renderer(&ctx, &lm, technique, a, f.width, f.height, 0)?
+    } else if sh_technique {
+        let data = crate::prt_cmd::sh_data_for(scene, technique, baked, bake, sh)?;
+        let (r, p) =
+            crate::prt_cmd::sh_renderer(&ctx, &data, technique, a, sh, f.width, f.height, 0)?;
+        projector = Some((p, data.scene().clone()));
+        r
     } else {
         Renderer::new(&ctx, scene, settings(technique, a, f.width, f.height, 0)?)?
     };
@@ -274,7 +286,14 @@ pub fn bench_frame(
     r.render(&ctx);
     let mut per_pass: std::collections::BTreeMap<&'static str, Vec<f64>> = Default::default();
     let (mut gpu, mut wall, mut cpu) = (vec![], vec![], vec![]);
+    let mut projection = vec![];
     for _ in 0..f.frames {
+        if let Some((p, sc)) = &projector {
+            let t0 = std::time::Instant::now();
+            let light = p.project(sc, None);
+            crate::prt_cmd::set_light(&ctx, &mut r, &light)?;
+            projection.push(t0.elapsed().as_secs_f64() * 1e3);
+        }
         let t = r.render(&ctx);
         for (k, v) in &t.gpu_ms {
             per_pass.entry(k).or_default().push(*v);
@@ -308,6 +327,10 @@ pub fn bench_frame(
         println!("  {:<16} {gpu:>9.3} ms", "GPU total");
     }
     println!("  {:<16} {cpu:>9.3} ms", "CPU volumes");
+    let projection = median(projection);
+    if projector.is_some() {
+        println!("  {:<16} {projection:>9.3} ms", "CPU SH light");
+    }
     println!(
         "  {:<16} {wall:>9.3} ms (submit to idle, incl. readback of timings)",
         "wall"
@@ -320,7 +343,7 @@ pub fn bench_frame(
                 "height": f.height, "lights": r.light_count(), "triangles": r.scene.triangles,
                 "adapter": ctx.info.name, "backend": format!("{:?}", ctx.info.backend),
                 "frames": f.frames, "passes_ms": passes, "gpu_ms": gpu,
-                "cpu_volumes_ms": cpu, "wall_ms": wall,
+                "cpu_volumes_ms": cpu, "cpu_sh_light_ms": projection, "wall_ms": wall,
             })
         );
     }

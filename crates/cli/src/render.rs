@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// Techniques `lightlab render` knows of, with whether they are built yet.
-pub const TECHNIQUES: [(&str, bool); 7] = [
+pub const TECHNIQUES: [(&str, bool); 12] = [
     ("reference", true),
     ("direct", true),
     ("phong", true),
@@ -19,6 +19,11 @@ pub const TECHNIQUES: [(&str, bool); 7] = [
     ("phong-shadow-maps", true),
     ("lightmap", true),
     ("lightmap+phong", true),
+    ("prt-vertex", true),
+    ("prt-textured", true),
+    ("shl", true),
+    ("shl-compressed", true),
+    ("shl-normalmapped", false),
 ];
 
 #[derive(Args)]
@@ -29,7 +34,9 @@ pub struct RenderArgs {
     /// `reference` (path-traced ground truth), `direct` (direct light only), or a GPU
     /// technique: `phong`, `phong-shadow-volumes`, `phong-shadow-maps`, `lightmap` (baked
     /// light only) or `lightmap+phong` (baked indirect light plus dynamic lights and shadow
-    /// volumes). The light-map techniques read `--baked DIR` or bake first.
+    /// volumes); the SH techniques `prt-vertex`, `prt-textured`, `shl`, `shl-compressed`
+    /// (transfer × the scene's lights projected on SH). The light-map and SH light-map
+    /// techniques read `--baked DIR` or bake first.
     #[arg(long, default_value = "reference")]
     pub technique: String,
     /// Folder of baked data, for techniques that use it.
@@ -72,6 +79,8 @@ pub struct RenderArgs {
     pub raster: crate::raster_cmd::RasterArgs,
     #[command(flatten)]
     pub bake: crate::bake_cmd::BakeArgs,
+    #[command(flatten)]
+    pub sh: crate::prt_cmd::ShArgs,
     /// Output image: .exr (linear) or .png (tone-mapped sRGB).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -139,6 +148,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     crate::raster_cmd::apply_brdf(&mut scene, a.raster.brdf.as_deref())?;
     if crate::raster_cmd::RASTER_TECHNIQUES.contains(&a.technique.as_str())
         || crate::bake_cmd::LIGHTMAP_TECHNIQUES.contains(&a.technique.as_str())
+        || crate::prt_cmd::SH_TECHNIQUES.contains(&a.technique.as_str())
     {
         return run_raster(&a, &scene);
     }
@@ -186,6 +196,10 @@ fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
     let (img, times) = if crate::bake_cmd::LIGHTMAP_TECHNIQUES.contains(&a.technique.as_str()) {
         let lm = crate::bake_cmd::lightmaps_for(scene, &a.technique, a.baked.as_deref(), &a.bake)?;
         crate::bake_cmd::render_lightmap(&ctx, &lm, &a.technique, &a.raster, w, h, a.camera)?
+    } else if crate::prt_cmd::SH_TECHNIQUES.contains(&a.technique.as_str()) {
+        let data =
+            crate::prt_cmd::sh_data_for(scene, &a.technique, a.baked.as_deref(), &a.bake, &a.sh)?;
+        crate::prt_cmd::render_sh(&ctx, &data, &a.technique, &a.raster, &a.sh, w, h, a.camera)?
     } else {
         crate::raster_cmd::render_raster(&ctx, scene, &a.technique, &a.raster, w, h, a.camera)?
     };
