@@ -129,43 +129,91 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
             let lightmap_techniques = density
                 .map(|_| crate::bake_cmd::LIGHTMAP_TECHNIQUES.to_vec())
                 .unwrap_or_default();
+            // The SH techniques on the scene made for them: one SH light-map bake serves shl,
+            // prt-textured and shl-compressed.
+            let sh_techniques = if name == "prt" {
+                crate::prt_cmd::SH_TECHNIQUES.to_vec()
+            } else {
+                vec![]
+            };
+            let sh_bake = crate::bake_cmd::BakeArgs {
+                texels_per_metre: 12.0,
+                transfer_samples: match quality {
+                    Quality::Preview => 32,
+                    Quality::Low => 64,
+                    Quality::High => 512,
+                },
+                bounces: 1,
+                ..Default::default()
+            };
+            let sh_args = crate::prt_cmd::ShArgs::default();
+            let mut sh_lightmaps = None;
             for technique in crate::raster_cmd::RASTER_TECHNIQUES
                 .into_iter()
                 .chain(lightmap_techniques)
+                .chain(sh_techniques)
             {
                 let t = Instant::now();
-                let (img, times) =
-                    if let Some(tpm) = density.filter(|_| technique.starts_with("lightmap")) {
-                        let bake = crate::bake_cmd::BakeArgs {
-                            texels_per_metre: tpm,
-                            samples: match quality {
-                                Quality::Preview => 8,
-                                Quality::Low => 64,
-                                Quality::High => 512,
-                            },
-                            ..Default::default()
-                        };
-                        let lm = crate::bake_cmd::lightmaps_for(&scene, technique, None, &bake)?;
-                        crate::bake_cmd::render_lightmap(
-                            ctx,
-                            &lm,
-                            technique,
-                            &args,
-                            settings.width,
-                            settings.height,
-                            0,
-                        )?
-                    } else {
-                        crate::raster_cmd::render_raster(
-                            ctx,
-                            &scene,
-                            technique,
-                            &args,
-                            settings.width,
-                            settings.height,
-                            0,
-                        )?
+                let (img, times) = if crate::prt_cmd::SH_TECHNIQUES.contains(&technique) {
+                    use crate::prt_cmd::{ShData, compressed, render_sh, sh_data_for};
+                    let data = match technique {
+                        "prt-vertex" => sh_data_for(&scene, technique, None, &sh_bake, &sh_args)?,
+                        _ => {
+                            if sh_lightmaps.is_none() {
+                                match sh_data_for(&scene, "shl", None, &sh_bake, &sh_args)? {
+                                    ShData::Textured(sl) => sh_lightmaps = Some(sl),
+                                    _ => unreachable!("shl data is textured"),
+                                }
+                            }
+                            let sl = sh_lightmaps.clone().expect("baked above");
+                            if technique == "shl-compressed" {
+                                compressed(sl, &sh_args)?
+                            } else {
+                                ShData::Textured(sl)
+                            }
+                        }
                     };
+                    render_sh(
+                        ctx,
+                        &data,
+                        technique,
+                        &args,
+                        &sh_args,
+                        settings.width,
+                        settings.height,
+                        0,
+                    )?
+                } else if let Some(tpm) = density.filter(|_| technique.starts_with("lightmap")) {
+                    let bake = crate::bake_cmd::BakeArgs {
+                        texels_per_metre: tpm,
+                        samples: match quality {
+                            Quality::Preview => 8,
+                            Quality::Low => 64,
+                            Quality::High => 512,
+                        },
+                        ..Default::default()
+                    };
+                    let lm = crate::bake_cmd::lightmaps_for(&scene, technique, None, &bake)?;
+                    crate::bake_cmd::render_lightmap(
+                        ctx,
+                        &lm,
+                        technique,
+                        &args,
+                        settings.width,
+                        settings.height,
+                        0,
+                    )?
+                } else {
+                    crate::raster_cmd::render_raster(
+                        ctx,
+                        &scene,
+                        technique,
+                        &args,
+                        settings.width,
+                        settings.height,
+                        0,
+                    )?
+                };
                 let seconds = t.elapsed().as_secs_f64();
                 let frame_ms = if times.gpu_ms.is_empty() {
                     times.wall_ms

@@ -25,7 +25,7 @@ use std::path::Path;
 pub const SH_TECHNIQUES: [&str; 4] = ["prt-vertex", "prt-textured", "shl", "shl-compressed"];
 
 /// Run-time options of the SH techniques.
-#[derive(Args, Clone, Debug, Default)]
+#[derive(Args, Clone, Debug)]
 pub struct ShArgs {
     /// Incident-light sample points: `scene` (one at the scene's centre: distant light, the
     /// default of shl*) or `object` (six per instance at its box faces, blended by 1/distance:
@@ -46,6 +46,18 @@ pub struct ShArgs {
     /// Representatives of `shl-compressed` (Fuchs §5.6; at most 65536).
     #[arg(long, default_value_t = 4096)]
     pub sh_representatives: usize,
+}
+
+impl Default for ShArgs {
+    fn default() -> Self {
+        ShArgs {
+            sh_points: None,
+            sh_window: None,
+            sh_window_size: None,
+            sh_filter: None,
+            sh_representatives: 4096,
+        }
+    }
 }
 
 /// Transfer data of an SH technique.
@@ -110,22 +122,27 @@ pub fn sh_data_for(
         }
     };
     if technique == "shl-compressed" {
-        let c = compress(
-            &sl,
-            &CompressSettings {
-                representatives: sh.sh_representatives,
-                ..Default::default()
-            },
-        )?;
-        let st = &c.stats;
-        eprintln!(
-            "compressed {} transfer vectors to {} representatives in {} iterations ({:.2} s): \
-             {:.1}× smaller, rms distance {:.4}",
-            st.vectors, st.representatives, st.iterations, st.seconds, st.ratio, st.rms_distance
-        );
-        return Ok(ShData::Compressed(sl, c));
+        return compressed(sl, sh);
     }
     Ok(ShData::Textured(sl))
+}
+
+/// Vector-quantise SH light-maps for `shl-compressed` (`--sh-representatives`).
+pub fn compressed(sl: ShLightmaps, sh: &ShArgs) -> Result<ShData> {
+    let c = compress(
+        &sl,
+        &CompressSettings {
+            representatives: sh.sh_representatives,
+            ..Default::default()
+        },
+    )?;
+    let st = &c.stats;
+    eprintln!(
+        "compressed {} transfer vectors to {} representatives in {} iterations ({:.2} s): \
+         {:.1}× smaller, rms distance {:.4}",
+        st.vectors, st.representatives, st.iterations, st.seconds, st.ratio, st.rms_distance
+    );
+    Ok(ShData::Compressed(sl, c))
 }
 
 impl ShData {
