@@ -215,6 +215,15 @@ fn unbuilt_methods_exit_with_code_2() {
     for args in [
         vec!["bake", "--scene", "cornell", "--method", "prt"],
         vec!["bake", "--scene", "cornell", "--method", "prt-textured"],
+        vec![
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            "shl-normalmapped",
+            "-o",
+            "/tmp/never-written.png",
+        ],
     ] {
         let o = lightlab(&args);
         assert_eq!(o.status.code(), Some(2), "{args:?}");
@@ -702,4 +711,100 @@ fn bake_sh_lightmaps_writes_coefficient_pages() {
     ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--transfer"), "{}", stderr(&o));
+
+    // The SH techniques render from the folder (a 3-band bake serves them all) on the GPU.
+    let baked = out.to_str().unwrap();
+    for (technique, extra) in [
+        ("shl", vec![]),
+        ("prt-textured", vec!["--sh-window", "lanczos"]),
+        (
+            "shl-compressed",
+            vec!["--sh-representatives", "64", "--sh-filter", "4tap"],
+        ),
+    ] {
+        let png = dir.path().join(format!("{technique}.png"));
+        let mut args = vec![
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            technique,
+            "--baked",
+            baked,
+            "--width",
+            "48",
+            "-o",
+            png.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let o = lightlab(&args);
+        assert!(o.status.success(), "{technique}: {}", stderr(&o));
+        assert!(png.exists(), "{technique}");
+    }
+    // Bad run-time options are clear errors.
+    for (flag, value) in [
+        ("--sh-filter", "trilinear"),
+        ("--sh-points", "everywhere"),
+        ("--sh-window", "gauss"),
+    ] {
+        let o = lightlab(&[
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            "shl",
+            "--baked",
+            baked,
+            "--width",
+            "16",
+            flag,
+            value,
+            "-o",
+            dir.path().join("x.png").to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{flag}");
+        assert!(stderr(&o).contains(flag), "{flag}: {}", stderr(&o));
+    }
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "cornell",
+        "--technique",
+        "prt-vertex",
+        "--baked",
+        baked,
+        "-o",
+        dir.path().join("v.png").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--baked"), "{}", stderr(&o));
+}
+
+#[test]
+fn prt_vertex_renders_without_a_bake() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("v.png");
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "shadows",
+        "--technique",
+        "prt-vertex",
+        "--transfer-samples",
+        "16",
+        "--bounces",
+        "1",
+        "--width",
+        "48",
+        "--json",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
+    assert_eq!(v["technique"], "prt-vertex");
+    // No emitters in `shadows`: its point and spot lights reach the surfaces through the
+    // transfer and the projected SH light.
+    let img = lightlab_core::image::Image::read(&png).unwrap();
+    assert!(img.mean().max_element() > 0.02, "lit: {:?}", img.mean());
 }
