@@ -246,6 +246,20 @@ impl ShLighting {
         }
     }
 
+    /// Sample points (group-major) and their coefficients (group, point, coefficient), flat
+    /// and in f32: the GPU renderer's `set_sh_light` input.
+    pub fn flattened(&self) -> (Vec<Vec3>, Vec<Vec3>) {
+        let points = self.points.iter().flatten().copied().collect();
+        let coeffs = self
+            .coeffs
+            .iter()
+            .flatten()
+            .flatten()
+            .map(|c| c.as_vec3())
+            .collect();
+        (points, coeffs)
+    }
+
     /// The incident radiance coefficients at `p` on instance `instance` (sample points blended).
     pub fn at(&self, instance: usize, p: Vec3) -> Vec<DVec3> {
         let g = self.group.get(instance).copied().unwrap_or(0);

@@ -347,8 +347,19 @@ pub fn lightmap_renderer(
         scene.lights.clear();
         s.shadows = ShadowMethod::None;
     }
-    let rects: Vec<Option<UvRect>> = lm
-        .layout
+    let rects = layout_rects(&lm.layout);
+    let input = LightmapInput {
+        pages: &lm.pages,
+        rects: &rects,
+        bicubic: a.lightmap_filter == "bicubic",
+        directional: lm.directional.as_deref(),
+    };
+    Ok(Renderer::with_lightmap(ctx, &scene, s, Some(&input))?)
+}
+
+/// The GPU's per-instance page rectangles of a light-map layout (light-maps, SH light-maps).
+pub fn layout_rects(layout: &lightlab_bake::layout::Layout) -> Vec<Option<UvRect>> {
+    layout
         .instances
         .iter()
         .map(|r| {
@@ -358,12 +369,5 @@ pub fn lightmap_renderer(
                 scale: r.scale,
             })
         })
-        .collect();
-    let input = LightmapInput {
-        pages: &lm.pages,
-        rects: &rects,
-        bicubic: a.lightmap_filter == "bicubic",
-        directional: lm.directional.as_deref(),
-    };
-    Ok(Renderer::with_lightmap(ctx, &scene, s, Some(&input))?)
+        .collect()
 }

@@ -5,7 +5,6 @@
 use crate::bake_cmd::BakeArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use glam::Vec3;
 use lightlab_bake::prt::{
     ShLightmaps, TransferKind, TransferSettings, VertexTransfer, bake_sh_lightmaps, read_sh,
     vertex_transfer,
@@ -15,7 +14,6 @@ use lightlab_bake::sh_light::{SamplePoints, ShLightSettings, ShLighting, ShProje
 use lightlab_core::image::Image;
 use lightlab_core::sh::Window;
 use lightlab_gpu::GpuContext;
-use lightlab_gpu::gpu_scene::UvRect;
 use lightlab_gpu::prt::{IndexPage, ShFilter, ShInput, ShTransfer};
 use lightlab_gpu::raster::{Ambient, FrameTimes, Renderer, ShadowMethod};
 use lightlab_scene::Scene;
@@ -196,30 +194,9 @@ pub fn light_settings(technique: &str, bands: usize, a: &ShArgs) -> Result<ShLig
     })
 }
 
-fn rects(layout: &lightlab_bake::layout::Layout) -> Vec<Option<UvRect>> {
-    layout
-        .instances
-        .iter()
-        .map(|r| {
-            r.map(|r| UvRect {
-                page: r.page,
-                offset: r.offset,
-                scale: r.scale,
-            })
-        })
-        .collect()
-}
-
 /// Upload this frame's SH light.
 pub fn set_light(ctx: &GpuContext, r: &mut Renderer, light: &ShLighting) -> Result<()> {
-    let points: Vec<Vec3> = light.points.iter().flatten().copied().collect();
-    let coeffs: Vec<Vec3> = light
-        .coeffs
-        .iter()
-        .flatten()
-        .flatten()
-        .map(|c| c.as_vec3())
-        .collect();
+    let (points, coeffs) = light.flattened();
     r.set_sh_light(ctx, &points, &coeffs)?;
     Ok(())
 }
@@ -255,7 +232,7 @@ pub fn sh_renderer(
     let rect_list;
     let input = match data {
         ShData::Textured(sl) => {
-            rect_list = rects(&sl.layout);
+            rect_list = crate::bake_cmd::layout_rects(&sl.layout);
             ShInput {
                 bands,
                 transfer: ShTransfer::Textured { pages: &sl.pages },
@@ -265,7 +242,7 @@ pub fn sh_renderer(
             }
         }
         ShData::Compressed(sl, c) => {
-            rect_list = rects(&sl.layout);
+            rect_list = crate::bake_cmd::layout_rects(&sl.layout);
             index_pages = c
                 .pages
                 .iter()

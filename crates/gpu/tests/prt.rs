@@ -37,14 +37,7 @@ fn gpu_render(ctx: &GpuContext, scene: &Scene, input: &ShInput, light: &ShLighti
     let mut unlit = scene.clone();
     unlit.lights.clear();
     let mut r = Renderer::with_sh(ctx, &unlit, settings(), input).unwrap();
-    let points: Vec<Vec3> = light.points.iter().flatten().copied().collect();
-    let coeffs: Vec<Vec3> = light
-        .coeffs
-        .iter()
-        .flatten()
-        .flatten()
-        .map(|c| c.as_vec3())
-        .collect();
+    let (points, coeffs) = light.flattened();
     r.set_sh_light(ctx, &points, &coeffs).unwrap();
     r.render(ctx);
     r.read_hdr(ctx).unwrap().downsample(K)
