@@ -207,7 +207,7 @@ impl ShLighting {
             SamplePoints::PerObject => (
                 (0..scene.instances.len())
                     .map(|i| {
-                        let (lo, hi) = instance_bounds(scene, i);
+                        let (lo, hi) = scene.instance_bounds(i).unwrap_or_default();
                         box_face_centres(lo, hi)
                     })
                     .collect(),
@@ -273,24 +273,6 @@ impl ShLighting {
             }
         }
         out
-    }
-}
-
-/// World-space bounds of one instance.
-pub fn instance_bounds(scene: &Scene, i: usize) -> (Vec3, Vec3) {
-    let inst = &scene.instances[i];
-    let mesh = &scene.meshes[inst.mesh];
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for p in &mesh.positions {
-        let w = inst.transform.transform_point3(*p);
-        lo = lo.min(w);
-        hi = hi.max(w);
-    }
-    if lo.x > hi.x {
-        (Vec3::ZERO, Vec3::ZERO)
-    } else {
-        (lo, hi)
     }
 }
 

@@ -313,10 +313,7 @@ pub fn render_lightmap(
     camera: usize,
 ) -> Result<(Image, FrameTimes)> {
     let mut r = lightmap_renderer(ctx, lm, technique, a, width, height, camera)?;
-    r.render(ctx);
-    let times = r.render(ctx);
-    let img = r.read_hdr(ctx)?;
-    Ok((img.downsample(a.ssaa), times))
+    crate::raster_cmd::timed_frame(ctx, &mut r, a.ssaa)
 }
 
 /// The GPU renderer of a light-map technique (`lightmap`: the light-maps alone;

@@ -201,7 +201,8 @@ pub fn set_light(ctx: &GpuContext, r: &mut Renderer, light: &ShLighting) -> Resu
     Ok(())
 }
 
-/// The GPU renderer of an SH technique, its light projector and this frame's light set.
+/// The GPU renderer of an SH technique (its first light set) and the light projector that
+/// re-projects the scene's lights each frame.
 #[allow(clippy::too_many_arguments)]
 pub fn sh_renderer(
     ctx: &GpuContext,
@@ -226,53 +227,44 @@ pub fn sh_renderer(
     let f = sh.sh_filter.as_deref().unwrap_or("bilinear");
     let filter = ShFilter::parse(f)
         .with_context(|| format!("--sh-filter must be nearest, bilinear or 4tap, not '{f}'"))?;
-    let per_object = ls.points == SamplePoints::PerObject;
-    let points = light.points[0].len();
     let index_pages: Vec<IndexPage>;
-    let rect_list;
-    let input = match data {
-        ShData::Textured(sl) => {
-            rect_list = crate::bake_cmd::layout_rects(&sl.layout);
-            ShInput {
-                bands,
-                transfer: ShTransfer::Textured { pages: &sl.pages },
-                rects: &rect_list,
-                per_object,
-                points,
-            }
-        }
+    let (transfer, rects) = match data {
+        ShData::Textured(sl) => (
+            ShTransfer::Textured { pages: &sl.pages },
+            crate::bake_cmd::layout_rects(&sl.layout),
+        ),
         ShData::Compressed(sl, c) => {
-            rect_list = crate::bake_cmd::layout_rects(&sl.layout);
             index_pages = c
                 .pages
                 .iter()
                 .map(|p| IndexPage {
                     width: p.width,
                     height: p.height,
-                    indices: p.indices.clone(),
+                    indices: &p.indices,
                 })
                 .collect();
-            ShInput {
-                bands,
-                transfer: ShTransfer::Compressed {
+            (
+                ShTransfer::Compressed {
                     pages: &index_pages,
                     representatives: &c.representatives,
                     filter,
                 },
-                rects: &rect_list,
-                per_object,
-                points,
-            }
+                crate::bake_cmd::layout_rects(&sl.layout),
+            )
         }
-        ShData::Vertex(_, vt) => ShInput {
-            bands,
-            transfer: ShTransfer::Vertex {
+        ShData::Vertex(_, vt) => (
+            ShTransfer::Vertex {
                 instances: &vt.instances,
             },
-            rects: &[],
-            per_object,
-            points,
-        },
+            vec![],
+        ),
+    };
+    let input = ShInput {
+        bands,
+        transfer,
+        rects: &rects,
+        per_object: ls.points == SamplePoints::PerObject,
+        points: light.points[0].len(),
     };
     let mut r = Renderer::with_sh(ctx, &scene, s, &input)?;
     set_light(ctx, &mut r, &light)?;
@@ -292,8 +284,5 @@ pub fn render_sh(
     camera: usize,
 ) -> Result<(Image, FrameTimes)> {
     let (mut r, _) = sh_renderer(ctx, data, technique, a, sh, width, height, camera)?;
-    r.render(ctx);
-    let times = r.render(ctx);
-    let img = r.read_hdr(ctx)?;
-    Ok((img.downsample(a.ssaa), times))
+    crate::raster_cmd::timed_frame(ctx, &mut r, a.ssaa)
 }

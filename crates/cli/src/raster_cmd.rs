@@ -183,11 +183,16 @@ pub fn render_raster(
 ) -> Result<(Image, FrameTimes)> {
     let s = settings(technique, a, width, height, camera)?;
     let mut r = Renderer::new(ctx, scene, s)?;
-    // The first frame compiles pipelines and uploads; time the second.
+    timed_frame(ctx, &mut r, a.ssaa)
+}
+
+/// Render two frames (the first compiles pipelines and uploads), return the second's image,
+/// downsampled by the supersampling factor, and its times.
+pub fn timed_frame(ctx: &GpuContext, r: &mut Renderer, ssaa: u32) -> Result<(Image, FrameTimes)> {
     r.render(ctx);
     let times = r.render(ctx);
     let img = r.read_hdr(ctx)?;
-    Ok((img.downsample(a.ssaa), times))
+    Ok((img.downsample(ssaa), times))
 }
 
 /// A GPU context, with the CLI's advice when none exists.

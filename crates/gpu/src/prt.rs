@@ -57,11 +57,11 @@ impl ShFilter {
 }
 
 /// One page of a compressed SH light-map: the representative index of every texel (row-major).
-#[derive(Clone, Debug, PartialEq)]
-pub struct IndexPage {
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IndexPage<'a> {
     pub width: u32,
     pub height: u32,
-    pub indices: Vec<u32>,
+    pub indices: &'a [u32],
 }
 
 /// Transfer data of an SH technique.
@@ -73,7 +73,7 @@ pub enum ShTransfer<'a> {
     Vertex { instances: &'a [Vec<f32>] },
     /// Vector-quantised: index pages and `representatives` (count × n², row-major).
     Compressed {
-        pages: &'a [IndexPage],
+        pages: &'a [IndexPage<'a>],
         representatives: &'a [f32],
         filter: ShFilter,
     },
@@ -194,6 +194,16 @@ impl ShInput<'_> {
                 pages.iter().map(|p| [p.width, p.height]).collect()
             }
             ShTransfer::Vertex { .. } => vec![],
+        }
+    }
+
+    /// Representatives of compressed transfer (0 otherwise).
+    pub fn representatives(&self) -> usize {
+        match &self.transfer {
+            ShTransfer::Compressed {
+                representatives, ..
+            } => representatives.len() / (self.bands * self.bands),
+            _ => 0,
         }
     }
 

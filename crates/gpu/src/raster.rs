@@ -447,6 +447,7 @@ impl ShResources {
             wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         );
         for (k, p) in pages.iter().enumerate() {
+            // Indices are checked below 65536 (`ShInput::validate`).
             let idx: Vec<u16> = p.indices.iter().map(|&i| i as u16).collect();
             ctx.queue.write_texture(
                 wgpu::TexelCopyTextureInfo {
@@ -846,12 +847,7 @@ impl Renderer {
                 Some(crate::prt::ShTransfer::Compressed { filter, .. }) => filter.code(),
                 _ => 0,
             },
-            sh_reps: match sh.map(|sh| &sh.transfer) {
-                Some(crate::prt::ShTransfer::Compressed {
-                    representatives, ..
-                }) => (representatives.len() / (sh.map_or(1, |s| s.bands * s.bands))) as u32,
-                _ => 0,
-            },
+            sh_reps: sh.map_or(0, |sh| sh.representatives() as u32),
             sh_coeff_base: sh.map_or(0, |sh| {
                 (sh.groups(scene.instances.len()) * sh.points) as u32
             }),
@@ -1382,6 +1378,25 @@ impl Renderer {
         })
     }
 
+    /// Compressed SH light-maps: relight every representative under this frame's light.
+    fn relight_pass(&self, enc: &mut wgpu::CommandEncoder, labels: &mut Vec<&'static str>) {
+        let Some((pipeline, group, wg)) = &self.sh.relight else {
+            return;
+        };
+        let ts = self.timestamps(labels, "sh relight");
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("sh relight"),
+            timestamp_writes: ts.map(|t| wgpu::ComputePassTimestampWrites {
+                query_set: t.query_set,
+                beginning_of_pass_write_index: t.beginning_of_pass_write_index,
+                end_of_pass_write_index: t.end_of_pass_write_index,
+            }),
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups(wg[0], wg[1], 1);
+    }
+
     fn shadow_map_passes(&self, enc: &mut wgpu::CommandEncoder, labels: &mut Vec<&'static str>) {
         let n = self.lights.len();
         let linear = self.settings.shadows == ShadowMethod::MapLinear;
@@ -1503,20 +1518,7 @@ impl Renderer {
         }
         let mut labels = vec![];
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        if let Some((pipeline, group, wg)) = &self.sh.relight {
-            let ts = self.timestamps(&mut labels, "sh relight");
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("sh relight"),
-                timestamp_writes: ts.map(|t| wgpu::ComputePassTimestampWrites {
-                    query_set: t.query_set,
-                    beginning_of_pass_write_index: t.beginning_of_pass_write_index,
-                    end_of_pass_write_index: t.end_of_pass_write_index,
-                }),
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(wg[0], wg[1], 1);
-        }
+        self.relight_pass(&mut enc, &mut labels);
         if self.settings.shadows.map() {
             self.shadow_map_passes(&mut enc, &mut labels);
         }
@@ -2156,20 +2158,7 @@ impl Renderer {
         }
         let mut labels = vec![];
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        if let Some((pipeline, group, wg)) = &self.sh.relight {
-            let ts = self.timestamps(&mut labels, "sh relight");
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("sh relight"),
-                timestamp_writes: ts.map(|t| wgpu::ComputePassTimestampWrites {
-                    query_set: t.query_set,
-                    beginning_of_pass_write_index: t.beginning_of_pass_write_index,
-                    end_of_pass_write_index: t.end_of_pass_write_index,
-                }),
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(wg[0], wg[1], 1);
-        }
+        self.relight_pass(&mut enc, &mut labels);
         if self.settings.shadows.map() {
             self.shadow_map_passes(&mut enc, &mut labels);
         }

@@ -137,7 +137,7 @@ fn gpu_sh_techniques_match_the_cpu_views() {
         .map(|p| IndexPage {
             width: p.width,
             height: p.height,
-            indices: p.indices.clone(),
+            indices: &p.indices,
         })
         .collect();
     let light = lighting(&sl.scene, s.bands, SamplePoints::PerObject);

@@ -439,14 +439,20 @@ impl Scene {
 
     /// World-space bounds of all instances (min, max); None for an empty scene.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        (0..self.instances.len())
+            .filter_map(|i| self.instance_bounds(i))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+    }
+
+    /// World-space bounds of instance `i`; None for an empty mesh.
+    pub fn instance_bounds(&self, i: usize) -> Option<(Vec3, Vec3)> {
+        let inst = &self.instances[i];
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for inst in &self.instances {
-            for p in &self.meshes[inst.mesh].positions {
-                let w = inst.transform.transform_point3(*p);
-                lo = lo.min(w);
-                hi = hi.max(w);
-            }
+        for p in &self.meshes[inst.mesh].positions {
+            let w = inst.transform.transform_point3(*p);
+            lo = lo.min(w);
+            hi = hi.max(w);
         }
         (lo.x <= hi.x).then_some((lo, hi))
     }
