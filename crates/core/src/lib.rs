@@ -13,6 +13,8 @@
 //! - [`sh`]: real spherical harmonics (the basis convention lives there), projection, rotation,
 //!   convolution, windows, triple products; [`sh_env`]: projection of environment maps;
 //! - [`quadrature`]: direction sets (exact Gauss and stratified);
+//! - [`lpv`]: light propagation volumes on the CPU (Kaplanyan's 6-face scheme with geometry
+//!   volume, and the WPI report's 18-neighbour scheme), the reference of the GPU passes;
 //! - [`param`]: sphere parameterisations (lat-long, angular, sphere map, octahedral, dual
 //!   paraboloid, cube) with per-texel solid angles.
 //!
@@ -22,6 +24,7 @@
 pub mod brdf;
 pub mod color;
 pub mod image;
+pub mod lpv;
 pub mod metrics;
 pub mod param;
 pub mod quadrature;

@@ -1,0 +1,664 @@
+//! Light propagation volumes on the CPU: the reference the GPU passes are tested against.
+//!
+//! Two schemes live here (see `docs/lpv.md`):
+//!
+//! - **Kaplanyan & Dachsbacher (2010)**, lightlab's `lpv`: virtual point lights (VPLs) from a
+//!   reflective shadow map are *scattered* into the cell that holds the VPL shifted half a cell
+//!   along its normal, as the 2-band SH of their radiant intensity Φ/π·max(0, n·ω); light moves
+//!   by gathering from the 6 face neighbours onto the 5 faces of the receiving cell (exact face
+//!   solid angles), each face's flux re-emitted as a clamped-cosine lobe around the face normal;
+//!   each iteration holds only newly arrived light and is summed into an accumulation volume;
+//!   a geometry volume (half a cell offset) of blocking potentials attenuates light across faces,
+//!   skipped on the first iteration.
+//! - **WPI 2011** (Dickson, Sandbrook & Oliver), lightlab's `lpv-faithful`: the report's
+//!   18-neighbour additive gather (`out = in + Σ f·w·max(0, I_n(d))·Y(d) / 18`, f = 0.65, edge
+//!   neighbours ×0.5, clamp-to-edge borders). It is not energy conserving; its regression values
+//!   (§5.5 of the extraction) are unit tests here.
+//!
+//! Units: a cell's SH holds radiant intensity I(ω) [W/sr] leaving the cell; radiance near the cell
+//! is I/s² (s = cell size), so irradiance on a surface of normal n is the cosine convolution of
+//! I(−ω)/s² (Ramamoorthi–Hanrahan factors π and 2π/3).
+//!
+//! SH order and signs are lightlab's (`crate::sh`): (Y₀₀, Y₁₋₁ ∝ y, Y₁₀ ∝ z, Y₁₁ ∝ x), all
+//! positive. The WPI shaders order band 1 as (x, y, z); Crytek's as (−y, z, −x); both are
+//! permutations/sign flips of this one.
+//!
+//! No crate implements LPVs; this module is our own, written from the papers.
+
+use glam::{IVec3, Vec3};
+
+/// Y₀₀ = 1/(2√π).
+pub const Y00: f32 = 0.282_094_8;
+/// The band-1 constant √(3/4π).
+pub const C1: f32 = 0.488_602_5;
+/// Solid angle of the far face of the receiving cell seen from the source cell's centre:
+/// 4·asin(1/(1 + 4·1.5²)) (checked against the exact rectangle formula in the unit test).
+pub const SOLID_ANGLE_FAR: f32 = 0.400_669_7;
+/// Solid angle of one side face of the receiving cell seen from the source cell's centre:
+/// (2π/3 − far)/4 = 0.4234313544. Erratum: the value 0.4234413544 quoted in many LPV
+/// implementations (and in our extraction) has a transposed digit; with it far + 4·side exceeds
+/// the shared face's 2π/3 by 4·10⁻⁵.
+pub const SOLID_ANGLE_SIDE: f32 = 0.423_431_35;
+
+/// Two-band SH coefficients in lightlab's order.
+pub type Sh4 = [f32; 4];
+/// One cell: SH per colour channel (r, g, b).
+pub type Cell = [Sh4; 3];
+
+/// The SH basis evaluated in direction `d` (unit): the projection of a delta in `d`.
+pub fn basis(d: Vec3) -> Sh4 {
+    [Y00, C1 * d.y, C1 * d.z, C1 * d.x]
+}
+
+/// Projection of the clamped cosine max(0, n·ω): (√π/2, √(π/3)·n).
+pub fn cosine_lobe(n: Vec3) -> Sh4 {
+    const A0: f32 = 0.886_226_9; // √π/2
+    const A1: f32 = 1.023_326_7; // √(π/3)
+    [A0, A1 * n.y, A1 * n.z, A1 * n.x]
+}
+
+pub fn dot(a: &Sh4, b: &Sh4) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
+}
+
+/// Evaluate SH `c` in direction `d`.
+pub fn eval(c: &Sh4, d: Vec3) -> f32 {
+    dot(c, &basis(d))
+}
+
+fn scaled(c: &Sh4, s: f32) -> Sh4 {
+    [c[0] * s, c[1] * s, c[2] * s, c[3] * s]
+}
+
+fn add_to(acc: &mut Sh4, c: &Sh4, s: f32) {
+    for i in 0..4 {
+        acc[i] += c[i] * s;
+    }
+}
+
+/// A cubic grid of n³ cubic cells: cell (i, j, k) spans origin + [i, i+1)·cell, etc.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    pub n: u32,
+    pub origin: Vec3,
+    pub cell: f32,
+}
+
+impl Grid {
+    /// The grid of `n`³ cells whose cube holds the box [lo, hi] centred, with `margin` cells of
+    /// space on every side of the box's largest extent.
+    pub fn around(lo: Vec3, hi: Vec3, n: u32, margin: f32) -> Grid {
+        let n = n.max(1);
+        let extent = (hi - lo).max_element().max(1e-6);
+        let cell = extent / (n as f32 - 2.0 * margin).max(1.0);
+        let centre = 0.5 * (lo + hi);
+        Grid {
+            n,
+            origin: centre - Vec3::splat(0.5 * cell * n as f32),
+            cell,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        (self.n as usize).pow(3)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    pub fn index(&self, c: IVec3) -> usize {
+        let n = self.n as usize;
+        (c.z as usize * n + c.y as usize) * n + c.x as usize
+    }
+
+    pub fn contains(&self, c: IVec3) -> bool {
+        let n = self.n as i32;
+        c.cmpge(IVec3::ZERO).all() && c.cmplt(IVec3::splat(n)).all()
+    }
+
+    /// The cell holding `p`, if inside the grid.
+    pub fn cell_of(&self, p: Vec3) -> Option<IVec3> {
+        let c = ((p - self.origin) / self.cell).floor().as_ivec3();
+        self.contains(c).then_some(c)
+    }
+
+    pub fn centre(&self, c: IVec3) -> Vec3 {
+        self.origin + (c.as_vec3() + 0.5) * self.cell
+    }
+
+    pub fn cells(&self) -> impl Iterator<Item = IVec3> + '_ {
+        let n = self.n as i32;
+        (0..n).flat_map(move |z| (0..n).flat_map(move |y| (0..n).map(move |x| IVec3::new(x, y, z))))
+    }
+}
+
+/// A virtual point light: a surfel of the reflective shadow map.
+#[derive(Clone, Copy, Debug)]
+pub struct Vpl {
+    pub position: Vec3,
+    pub normal: Vec3,
+    /// Reflected flux Φ [W] per colour channel.
+    pub flux: Vec3,
+}
+
+/// A surfel that blocks light: position, unit normal and area [m²].
+#[derive(Clone, Copy, Debug)]
+pub struct Surfel {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub area: f32,
+}
+
+/// A light propagation volume: intensity SH per cell and colour.
+#[derive(Clone, Debug)]
+pub struct Volume {
+    pub grid: Grid,
+    pub cells: Vec<Cell>,
+}
+
+impl Volume {
+    pub fn new(grid: Grid) -> Volume {
+        Volume {
+            grid,
+            cells: vec![[[0.0; 4]; 3]; grid.len()],
+        }
+    }
+
+    pub fn at(&self, c: IVec3) -> &Cell {
+        &self.cells[self.grid.index(c)]
+    }
+
+    /// Total flux Σ ∫I dω = Σ √(4π)·c₀ per colour (the band-1 terms integrate to zero).
+    pub fn total_flux(&self) -> Vec3 {
+        let k = 4.0 * std::f32::consts::PI * Y00;
+        let mut t = [0.0f64; 3];
+        for c in &self.cells {
+            for (ch, sh) in c.iter().enumerate() {
+                t[ch] += (sh[0] * k) as f64;
+            }
+        }
+        Vec3::new(t[0] as f32, t[1] as f32, t[2] as f32)
+    }
+
+    /// Add `other` (same grid) into this volume.
+    pub fn accumulate(&mut self, other: &Volume) {
+        for (a, b) in self.cells.iter_mut().zip(&other.cells) {
+            for ch in 0..3 {
+                add_to(&mut a[ch], &b[ch], 1.0);
+            }
+        }
+    }
+
+    /// Trilinear interpolation of the cell SH at `p` (cell centres are the samples; clamped at
+    /// the border).
+    pub fn sample(&self, p: Vec3) -> Cell {
+        let g = &self.grid;
+        let f = (p - g.origin) / g.cell - 0.5;
+        let max = (g.n - 1) as f32;
+        let f = f.clamp(Vec3::ZERO, Vec3::splat(max));
+        let base = f.floor().as_ivec3().min(IVec3::splat(g.n as i32 - 1));
+        let t = f - base.as_vec3();
+        let mut out = [[0.0; 4]; 3];
+        for corner in 0..8 {
+            let o = IVec3::new(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+            let c = (base + o).min(IVec3::splat(g.n as i32 - 1));
+            let w = (if o.x == 1 { t.x } else { 1.0 - t.x })
+                * (if o.y == 1 { t.y } else { 1.0 - t.y })
+                * (if o.z == 1 { t.z } else { 1.0 - t.z });
+            if w == 0.0 {
+                continue;
+            }
+            let cell = self.at(c);
+            for ch in 0..3 {
+                add_to(&mut out[ch], &cell[ch], w);
+            }
+        }
+        out
+    }
+
+    /// Irradiance E [W/m²] at `p` on a surface of normal `n`, as lightlab's `lpv` shades: the
+    /// volume is read half a cell along n (against bleeding through thin walls), incident radiance
+    /// is I(−ω)/s², convolved with the clamped cosine; negative results clamp to 0.
+    pub fn irradiance(&self, p: Vec3, n: Vec3) -> Vec3 {
+        let s = self.grid.cell;
+        let sh = self.sample(p + 0.5 * s * n);
+        let mut e = [0.0f32; 3];
+        for ch in 0..3 {
+            e[ch] = irradiance_of(&sh[ch], n, s);
+        }
+        Vec3::from_array(e)
+    }
+}
+
+/// Irradiance on normal `n` from one channel's intensity SH in a cell of size `s`:
+/// (π·c₀·Y₀₀ + 2π/3·c₁·Y₁(−n)) / s², clamped at zero.
+pub fn irradiance_of(c: &Sh4, n: Vec3, s: f32) -> f32 {
+    use std::f32::consts::PI;
+    let y = basis(-n);
+    let e = PI * c[0] * y[0] + 2.0 * PI / 3.0 * (c[1] * y[1] + c[2] * y[2] + c[3] * y[3]);
+    (e / (s * s)).max(0.0)
+}
+
+/// Scatter VPLs into a volume (Kaplanyan): each adds Φ/π·cosine_lobe(n) to the cell holding
+/// its position moved half a cell along n; VPLs outside the grid are dropped.
+pub fn inject(grid: Grid, vpls: &[Vpl]) -> Volume {
+    let mut v = Volume::new(grid);
+    for vpl in vpls {
+        let Some(c) = grid.cell_of(vpl.position + 0.5 * grid.cell * vpl.normal) else {
+            continue;
+        };
+        let lobe = scaled(&cosine_lobe(vpl.normal), 1.0 / std::f32::consts::PI);
+        let cell = &mut v.cells[grid.index(c)];
+        for ch in 0..3 {
+            add_to(&mut cell[ch], &lobe, vpl.flux[ch]);
+        }
+    }
+    v
+}
+
+/// Normalisation of a blocker's lobe (see [`Occlusion::inject`]).
+pub const BLOCKER_SCALE: f32 = 4.0 / 3.0;
+
+/// The geometry volume: blocking potential SH per cell of a grid offset by half a cell, its
+/// (n+1)³ cell centres at the corners of the light volume's cells.
+#[derive(Clone, Debug)]
+pub struct Occlusion {
+    pub grid: Grid,
+    pub cells: Vec<Sh4>,
+}
+
+impl Occlusion {
+    /// Blocking potential of surfels (Kaplanyan): each adds (A/s²)·⟨n|ω⟩₊ to the geometry cell
+    /// nearest to it. The 2-band projection of the clamped cosine peaks at 0.75, so the lobe is
+    /// scaled by 4/3: a surface covering a whole face blocks it fully at normal incidence.
+    pub fn inject(light: Grid, surfels: &[Surfel]) -> Occlusion {
+        let grid = Grid {
+            n: light.n + 1,
+            origin: light.origin - Vec3::splat(0.5 * light.cell),
+            cell: light.cell,
+        };
+        let mut cells = vec![[0.0; 4]; grid.len()];
+        let inv = BLOCKER_SCALE / (light.cell * light.cell);
+        for s in surfels {
+            let Some(c) = grid.cell_of(s.position) else {
+                continue;
+            };
+            add_to(
+                &mut cells[grid.index(c)],
+                &cosine_lobe(s.normal),
+                s.area * inv,
+            );
+        }
+        Occlusion { grid, cells }
+    }
+
+    /// Transmittance of light travelling along `dir` through the face between light cell `c`
+    /// and its neighbour `c + axis`: 1 − B(−dir), B averaged over the face's four corners.
+    pub fn transmittance(&self, c: IVec3, axis: IVec3, dir: Vec3) -> f32 {
+        // The face's corners in geometry-grid indices: light cell c's corner (i, j, k) is the
+        // geometry cell (i, j, k); the face towards +axis has corners with that axis at c+1
+        // (c for negative axes).
+        let along = c + axis.max(IVec3::ZERO);
+        let (u, v) = perpendicular(axis);
+        let mut b = 0.0;
+        for (du, dv) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let g = along + u * du + v * dv;
+            b += eval(&self.cells[self.grid.index(g)], -dir);
+        }
+        1.0 - (0.25 * b).clamp(0.0, 1.0)
+    }
+}
+
+/// The two positive unit axes perpendicular to an axis direction.
+fn perpendicular(axis: IVec3) -> (IVec3, IVec3) {
+    if axis.x != 0 {
+        (IVec3::Y, IVec3::Z)
+    } else if axis.y != 0 {
+        (IVec3::X, IVec3::Z)
+    } else {
+        (IVec3::X, IVec3::Y)
+    }
+}
+
+/// The six axis directions.
+pub const AXES: [IVec3; 6] = [
+    IVec3::new(1, 0, 0),
+    IVec3::new(-1, 0, 0),
+    IVec3::new(0, 1, 0),
+    IVec3::new(0, -1, 0),
+    IVec3::new(0, 0, 1),
+    IVec3::new(0, 0, -1),
+];
+
+/// One propagation step (Kaplanyan): returns only the newly arrived light. With an occlusion
+/// volume, light crossing into the receiving cell is attenuated by its transmittance.
+pub fn propagate_step(src: &Volume, occlusion: Option<&Occlusion>) -> Volume {
+    let g = src.grid;
+    let mut out = Volume::new(g);
+    for c in g.cells() {
+        let mut acc = [[0.0f32; 4]; 3];
+        for d in AXES {
+            let s = c - d;
+            if !g.contains(s) {
+                continue;
+            }
+            let from = src.at(s);
+            let dv = d.as_vec3();
+            let t = occlusion.map_or(1.0, |o| o.transmittance(s, d, dv));
+            if t <= 0.0 {
+                continue;
+            }
+            // Far face: direction d, re-emitted around d.
+            let mut faces = [(dv, dv, SOLID_ANGLE_FAR); 5];
+            let mut k = 1;
+            for side in AXES {
+                if side == d || side == -d {
+                    continue;
+                }
+                let sv = side.as_vec3();
+                faces[k] = ((dv + 0.5 * sv).normalize(), sv, SOLID_ANGLE_SIDE);
+                k += 1;
+            }
+            for (w, normal, solid) in faces {
+                let lobe = scaled(&cosine_lobe(normal), t * solid / std::f32::consts::PI);
+                for ch in 0..3 {
+                    let flux = eval(&from[ch], w);
+                    add_to(&mut acc[ch], &lobe, flux);
+                }
+            }
+        }
+        out.cells[g.index(c)] = acc;
+    }
+    out
+}
+
+/// Seed plus `iterations` propagation steps, accumulated. Occlusion (if any) is skipped on the
+/// first step, as Kaplanyan & Dachsbacher do against self-shadowing.
+pub fn propagate(seed: &Volume, occlusion: Option<&Occlusion>, iterations: u32) -> Volume {
+    let mut acc = seed.clone();
+    let mut cur = seed.clone();
+    for i in 0..iterations {
+        cur = propagate_step(&cur, if i == 0 { None } else { occlusion });
+        acc.accumulate(&cur);
+    }
+    acc
+}
+
+/// The WPI report's propagation falloff f.
+pub const WPI_FALLOFF: f32 = 0.65;
+
+/// One step of the WPI report's propagation (faithful to its shader): each cell adds, from its
+/// 6 face (weight 1) and 12 edge (weight ½) neighbours, f·w·max(0, I_n(d))·Y(d)/18 with d the
+/// direction from the neighbour towards the cell, to its own previous value; borders clamp.
+pub fn propagate_step_wpi(src: &Volume) -> Volume {
+    let g = src.grid;
+    let n = g.n as i32;
+    let mut out = src.clone();
+    let mut offsets = Vec::with_capacity(18);
+    for d in AXES {
+        offsets.push((d, 1.0f32));
+    }
+    for a in 0..3 {
+        for b in (a + 1)..3 {
+            for sa in [-1, 1] {
+                for sb in [-1, 1] {
+                    let mut o = IVec3::ZERO;
+                    o[a] = sa;
+                    o[b] = sb;
+                    offsets.push((o, 0.5));
+                }
+            }
+        }
+    }
+    for c in g.cells() {
+        let mut acc = [[0.0f32; 4]; 3];
+        for &(o, w) in &offsets {
+            let nb = (c + o).clamp(IVec3::ZERO, IVec3::splat(n - 1));
+            let d = -o.as_vec3().normalize();
+            let y = basis(d);
+            let from = src.at(nb);
+            for ch in 0..3 {
+                let i = dot(&from[ch], &y).max(0.0);
+                add_to(&mut acc[ch], &y, WPI_FALLOFF * w * i);
+            }
+        }
+        let cell = &mut out.cells[g.index(c)];
+        for ch in 0..3 {
+            add_to(&mut cell[ch], &acc[ch], 1.0 / 18.0);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    fn grid(n: u32) -> Grid {
+        Grid {
+            n,
+            origin: Vec3::ZERO,
+            cell: 1.0,
+        }
+    }
+
+    /// The solid angle of a rectangle [x0,x1]×[y0,y1] at distance h (exact, Van Oosterom form).
+    fn rect_solid_angle(x0: f64, x1: f64, y0: f64, y1: f64, h: f64) -> f64 {
+        let f = |x: f64, y: f64| (x * y / (h * (x * x + y * y + h * h).sqrt())).atan();
+        f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0)
+    }
+
+    #[test]
+    fn face_solid_angles_are_exact() {
+        // Far face: a unit square at distance 1.5 from the source centre.
+        let far = rect_solid_angle(-0.5, 0.5, -0.5, 0.5, 1.5);
+        assert!((far - 4.0 * (1.0f64 / (1.0 + 4.0 * 1.5 * 1.5)).asin()).abs() < 1e-9);
+        assert!((far - SOLID_ANGLE_FAR as f64).abs() < 1e-6, "{far}");
+        // Side face: plane at distance 0.5, spanning [0.5, 1.5] along the axis and [−.5, .5].
+        let side = rect_solid_angle(0.5, 1.5, -0.5, 0.5, 0.5);
+        assert!((side - SOLID_ANGLE_SIDE as f64).abs() < 1e-6, "{side}");
+        // Far + 4 sides = the shared face seen from the source centre = 2π/3.
+        assert!((far + 4.0 * side - 2.0 * PI / 3.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn lobes_project_as_expected() {
+        // Integrate max(0, n·ω)·Y_i(ω) numerically over a fine lat-long grid.
+        let n = Vec3::new(0.3, -0.5, 0.8).normalize();
+        let (nt, np) = (400, 800);
+        let mut c = [0.0f64; 4];
+        for i in 0..nt {
+            let th = (i as f64 + 0.5) * PI / nt as f64;
+            for j in 0..np {
+                let ph = (j as f64 + 0.5) * 2.0 * PI / np as f64;
+                let w = Vec3::new(
+                    (th.sin() * ph.cos()) as f32,
+                    (th.sin() * ph.sin()) as f32,
+                    th.cos() as f32,
+                );
+                let f = n.dot(w).max(0.0) as f64;
+                let y = basis(w);
+                let dw = th.sin() * (PI / nt as f64) * (2.0 * PI / np as f64);
+                for k in 0..4 {
+                    c[k] += f * y[k] as f64 * dw;
+                }
+            }
+        }
+        let want = cosine_lobe(n);
+        for k in 0..4 {
+            assert!(
+                (c[k] - want[k] as f64).abs() < 2e-4,
+                "{k}: {} vs {}",
+                c[k],
+                want[k]
+            );
+        }
+        // The projected lobe integrates to π; a delta evaluated at its direction gives 1/π.
+        assert!((want[0] as f64 * 4.0 * PI * Y00 as f64 - PI).abs() < 1e-5);
+        let d = Vec3::new(0.0, 0.6, 0.8);
+        assert!((eval(&basis(d), d) as f64 - 1.0 / PI).abs() < 1e-6);
+        // WPI's worked example (Eq 3.11–3.12): six axis samples of 0.8 → c₀ = 2.835926, back to 0.8.
+        let c0 = 4.0 * PI / 6.0 * 6.0 * 0.8 * Y00 as f64;
+        assert!((c0 - 2.835_926_164).abs() < 1e-6);
+        assert!((c0 * Y00 as f64 - 0.8).abs() < 1e-6);
+    }
+
+    #[test]
+    fn six_face_propagation_conserves_flux() {
+        let g = grid(17);
+        let mid = IVec3::splat(8);
+        for normal in [
+            Vec3::Y,
+            Vec3::new(0.6, 0.0, -0.8),
+            Vec3::new(1.0, 1.0, 1.0).normalize(),
+        ] {
+            let vpl = Vpl {
+                position: g.centre(mid),
+                normal,
+                flux: Vec3::new(1.0, 2.0, 0.5),
+            };
+            let seed = inject(
+                g,
+                &[Vpl {
+                    position: vpl.position - 0.5 * normal,
+                    ..vpl
+                }],
+            );
+            let f0 = seed.total_flux();
+            assert!((f0 - vpl.flux).abs().max_element() < 1e-5, "{f0}");
+            let mut cur = seed;
+            for it in 0..6 {
+                cur = propagate_step(&cur, None);
+                let f = cur.total_flux();
+                let err = ((f - vpl.flux) / vpl.flux).abs().max_element();
+                assert!(err < 0.01, "iteration {it}: {f} vs {}", vpl.flux);
+            }
+        }
+    }
+
+    #[test]
+    fn wpi_propagation_matches_the_reports_regression_values() {
+        // Extraction §5.5: isotropic seed DC = 1 on 9³.
+        let g = grid(9);
+        let mut v = Volume::new(g);
+        let mid = IVec3::splat(4);
+        v.cells[g.index(mid)] = [[1.0, 0.0, 0.0, 0.0]; 3];
+        let k = 1.0 / (4.0 * std::f32::consts::PI * Y00); // flux → DC sum
+        let totals = [1.0345, 1.0706, 1.1084, 1.1479];
+        for (it, want) in totals.iter().enumerate() {
+            v = propagate_step_wpi(&v);
+            let dc = v.total_flux().x * k;
+            assert!(
+                (dc - want).abs() < 6e-4,
+                "iteration {}: {dc} vs {want}",
+                it + 1
+            );
+            assert!((v.at(mid)[0][0] - 1.0).abs() < 1e-6, "the seed is kept");
+            let nb = v.at(mid + IVec3::X)[0][0];
+            assert!(
+                (nb - (it as f32 + 1.0) * 0.002_873_7).abs() < 2e-5 * (it as f32 + 1.0),
+                "{nb}"
+            );
+        }
+        // A delta towards +x reaches only the +x side: 0.003243 per pass.
+        let mut v = Volume::new(g);
+        v.cells[g.index(mid)] = [basis(Vec3::X); 3];
+        v = propagate_step_wpi(&v);
+        let plus = v.at(mid + IVec3::X)[0][0];
+        assert!((plus - 0.003_243).abs() < 2e-6, "{plus}");
+        assert_eq!(v.at(mid - IVec3::X)[0][0], 0.0);
+    }
+
+    #[test]
+    fn the_unnormalised_scheme_fails_conservation_and_the_six_face_scheme_passes() {
+        let g = grid(11);
+        let mut v = Volume::new(g);
+        v.cells[g.index(IVec3::splat(5))] = [[1.0, 0.0, 0.0, 0.0]; 3];
+        let f0 = v.total_flux().x;
+        let wpi = propagate_step_wpi(&propagate_step_wpi(&v)).total_flux().x;
+        let six = propagate_step(&propagate_step(&v, None), None)
+            .total_flux()
+            .x;
+        assert!((wpi / f0 - 1.0).abs() > 0.05, "WPI grows: {}", wpi / f0);
+        assert!(
+            (six / f0 - 1.0).abs() < 0.01,
+            "6-face conserves: {}",
+            six / f0
+        );
+    }
+
+    #[test]
+    fn injection_shifts_half_a_cell_along_the_normal() {
+        let g = grid(4);
+        // On the boundary between cells x=1 and x=2, facing +x: lands in x=2.
+        let v = inject(
+            g,
+            &[Vpl {
+                position: Vec3::new(2.0, 1.5, 1.5),
+                normal: Vec3::X,
+                flux: Vec3::ONE,
+            }],
+        );
+        assert!(v.at(IVec3::new(2, 1, 1))[0][0] > 0.0);
+        assert_eq!(v.at(IVec3::new(1, 1, 1))[0][0], 0.0);
+        // Facing −x: lands in x=1.
+        let v = inject(
+            g,
+            &[Vpl {
+                position: Vec3::new(2.0, 1.5, 1.5),
+                normal: -Vec3::X,
+                flux: Vec3::ONE,
+            }],
+        );
+        assert!(v.at(IVec3::new(1, 1, 1))[0][0] > 0.0);
+    }
+
+    #[test]
+    fn a_wall_of_blockers_stops_light() {
+        // A plane of surfels at x = 5 facing −x fills the geometry cells there; light
+        // travelling +x from x < 5 is stopped, light behind the plane is not affected.
+        let g = grid(10);
+        let mut surfels = Vec::new();
+        for y in 0..40 {
+            for z in 0..40 {
+                surfels.push(Surfel {
+                    position: Vec3::new(5.0, y as f32 * 0.25, z as f32 * 0.25),
+                    normal: -Vec3::X,
+                    area: 0.0625,
+                });
+            }
+        }
+        let occ = Occlusion::inject(g, &surfels);
+        let c = IVec3::new(4, 5, 5);
+        let t_in = occ.transmittance(c, IVec3::X, Vec3::X);
+        assert!(t_in < 0.05, "{t_in}");
+        let t_back = occ.transmittance(IVec3::new(5, 5, 5), -IVec3::X, -Vec3::X);
+        assert!(t_back > 0.99, "{t_back}");
+        // Elsewhere the volume is clear.
+        assert_eq!(
+            occ.transmittance(IVec3::new(2, 5, 5), IVec3::X, Vec3::X),
+            1.0
+        );
+    }
+
+    #[test]
+    fn irradiance_of_a_uniform_field() {
+        // Isotropic intensity I in every cell: radiance I/s², irradiance π·I/s² on any normal.
+        let g = Grid {
+            n: 4,
+            origin: Vec3::ZERO,
+            cell: 0.5,
+        };
+        let mut v = Volume::new(g);
+        let i = 2.0;
+        for c in &mut v.cells {
+            // I(ω) = c₀·Y₀₀ = i.
+            *c = [[i / Y00, 0.0, 0.0, 0.0]; 3];
+        }
+        let e = v.irradiance(Vec3::splat(1.0), Vec3::new(0.0, 0.6, 0.8));
+        let want = std::f32::consts::PI * i / 0.25;
+        assert!((e.x - want).abs() < 1e-3 * want, "{e} vs {want}");
+    }
+}
