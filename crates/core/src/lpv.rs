@@ -250,8 +250,8 @@ pub fn inject(grid: Grid, vpls: &[Vpl]) -> Volume {
         };
         let lobe = scaled(&cosine_lobe(vpl.normal), 1.0 / std::f32::consts::PI);
         let cell = &mut v.cells[grid.index(c)];
-        for ch in 0..3 {
-            add_to(&mut cell[ch], &lobe, vpl.flux[ch]);
+        for (ch, sh) in cell.iter_mut().enumerate() {
+            add_to(sh, &lobe, vpl.flux[ch]);
         }
     }
     v
