@@ -60,9 +60,11 @@ pub struct BakeArgs {
     /// `--method sh`: unshadowed, shadowed or interreflected transfer.
     #[arg(long, default_value = "interreflected")]
     pub transfer: String,
-    /// `--method sh`: bounces of inter-reflected transfer.
-    #[arg(long, default_value_t = 2)]
-    pub bounces: u32,
+    /// `--method sh`: bounces of inter-reflected transfer (default 2). With `--technique
+    /// reference`: light that bounced at most this many times before reaching the surface seen
+    /// (exactly this many with `--indirect-only`; default 1 then).
+    #[arg(long)]
+    pub bounces: Option<u32>,
     /// `--method sh`: directions per texel and vertex.
     #[arg(long, default_value_t = 256)]
     pub transfer_samples: u32,
@@ -83,7 +85,7 @@ impl Default for BakeArgs {
             bake_seed: 0,
             bands: 4,
             transfer: "interreflected".into(),
-            bounces: 2,
+            bounces: None,
             transfer_samples: 256,
         }
     }
@@ -235,7 +237,7 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
         "unshadowed" => TransferKind::Unshadowed,
         "shadowed" => TransferKind::Shadowed,
         "interreflected" => TransferKind::Interreflected {
-            bounces: args.bounces,
+            bounces: args.bounces.unwrap_or(2),
         },
         t => bail!("--transfer must be unshadowed, shadowed or interreflected, not '{t}'"),
     };

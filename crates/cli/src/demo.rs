@@ -143,7 +143,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                     Quality::Low => 64,
                     Quality::High => 512,
                 },
-                bounces: 1,
+                bounces: Some(1),
                 ..Default::default()
             };
             let sh_args = crate::prt_cmd::ShArgs::default();

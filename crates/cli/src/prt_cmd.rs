@@ -70,7 +70,7 @@ fn transfer_settings(args: &BakeArgs) -> Result<TransferSettings> {
         "unshadowed" => TransferKind::Unshadowed,
         "shadowed" => TransferKind::Shadowed,
         "interreflected" => TransferKind::Interreflected {
-            bounces: args.bounces,
+            bounces: args.bounces.unwrap_or(2),
         },
         t => bail!("--transfer must be unshadowed, shadowed or interreflected, not '{t}'"),
     };

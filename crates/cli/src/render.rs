@@ -52,6 +52,10 @@ pub struct RenderArgs {
     /// Largest number of scattering events per path.
     #[arg(long, default_value_t = 16)]
     pub max_depth: u32,
+    /// `reference`: only light that bounced exactly `--bounces` times (default 1) off surfaces
+    /// before reaching the surface seen: no emission, no direct light.
+    #[arg(long)]
+    pub indirect_only: bool,
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Scene camera index.
@@ -152,12 +156,13 @@ pub fn run(a: RenderArgs) -> Result<()> {
     {
         return run_raster(&a, &scene);
     }
+    let (min_depth, max_depth) = depth_range(&a)?;
     let settings = RenderSettings {
         width: a.width,
         height: a.height.unwrap_or(a.width),
         spp: a.spp,
-        max_depth: a.max_depth,
-        min_depth: 0,
+        max_depth,
+        min_depth,
         seed: a.seed,
         camera: a.camera,
     };
@@ -187,6 +192,27 @@ pub fn run(a: RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The path depths (scattering events) `reference` and `direct` keep: `--bounces k` limits light
+/// to k bounces before the visible surface (depth k + 1), `--indirect-only` keeps exactly that.
+fn depth_range(a: &RenderArgs) -> Result<(u32, u32)> {
+    if a.technique == "direct" && (a.indirect_only || a.bake.bounces.is_some()) {
+        bail!("--bounces and --indirect-only apply to --technique reference, not direct");
+    }
+    if a.indirect_only {
+        let k = a.bake.bounces.unwrap_or(1);
+        anyhow::ensure!(
+            (1..=1023).contains(&k),
+            "--indirect-only needs --bounces in 1..=1023 (got {k})"
+        );
+        return Ok((k + 1, k + 1));
+    }
+    match a.bake.bounces {
+        Some(k) if k < 1024 => Ok((0, k + 1)),
+        Some(k) => bail!("--bounces {k} must be below 1024"),
+        None => Ok((0, a.max_depth)),
+    }
 }
 
 fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
