@@ -87,6 +87,10 @@ pub fn all_shaders() -> Vec<(&'static str, &'static str)> {
             "common.wgsl + prt_relit.wgsl",
             crate::prt::RELIT_SOURCE.as_str(),
         ),
+        (
+            "common.wgsl + material.wgsl + lpv.wgsl",
+            crate::lpv::LPV_SOURCE.as_str(),
+        ),
     ]
 }
 

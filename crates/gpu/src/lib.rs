@@ -11,6 +11,7 @@
 pub mod gpu_scene;
 pub mod layout;
 pub mod lights;
+pub mod lpv;
 pub mod prt;
 pub mod raster;
 pub mod shadow_volume;

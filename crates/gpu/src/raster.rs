@@ -28,11 +28,12 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
-/// WGSL of the renderer: common.wgsl followed by raster.wgsl.
+/// WGSL of the renderer: common.wgsl, material.wgsl, raster.wgsl.
 pub static SHADER_SOURCE: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
     format!(
-        "{}\n{}",
+        "{}\n{}\n{}",
         crate::uniforms::COMMON_WGSL,
+        crate::uniforms::MATERIAL_WGSL,
         include_str!("shaders/raster.wgsl")
     )
 });
@@ -385,6 +386,7 @@ pub struct Renderer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: FrameUniforms,
     sh: ShResources,
+    lpv: Option<crate::lpv::Lpv>,
 }
 
 /// GPU data of the SH techniques (dummies when there are none).
@@ -637,7 +639,7 @@ impl Renderer {
         settings: RasterSettings,
         lightmap: Option<&LightmapInput>,
     ) -> Result<Renderer, RasterError> {
-        Self::build(ctx, scene, settings, lightmap, None)
+        Self::build(ctx, scene, settings, lightmap, None, None)
     }
 
     /// A renderer whose ambient term is diffuse × SH transfer · SH light (the PRT techniques,
@@ -649,7 +651,25 @@ impl Renderer {
         sh: &crate::prt::ShInput,
     ) -> Result<Renderer, RasterError> {
         sh.validate(scene).map_err(RasterError::Settings)?;
-        Self::build(ctx, scene, settings, None, Some(sh))
+        Self::build(ctx, scene, settings, None, Some(sh), None)
+    }
+
+    /// A renderer whose diffuse surfaces also receive the indirect light of a light propagation
+    /// volume (`crate::lpv`), recomputed every frame; `indirect_only` renders only that light
+    /// (the `--debug-view indirect` of the `lpv` techniques).
+    pub fn with_lpv(
+        ctx: &GpuContext,
+        scene: &Scene,
+        settings: RasterSettings,
+        lpv: &crate::lpv::LpvSettings,
+        indirect_only: bool,
+    ) -> Result<Renderer, RasterError> {
+        Self::build(ctx, scene, settings, None, None, Some((lpv, indirect_only)))
+    }
+
+    /// The light propagation volume, if this renderer has one.
+    pub fn lpv(&self) -> Option<&crate::lpv::Lpv> {
+        self.lpv.as_ref()
     }
 
     fn build(
@@ -658,6 +678,7 @@ impl Renderer {
         settings: RasterSettings,
         lightmap: Option<&LightmapInput>,
         sh: Option<&crate::prt::ShInput>,
+        lpv: Option<(&crate::lpv::LpvSettings, bool)>,
     ) -> Result<Renderer, RasterError> {
         let s = &settings;
         if let Some(lm) = lightmap
@@ -734,6 +755,10 @@ impl Renderer {
                 .collect()
         });
         let gscene = GpuScene::with_lightmap_uvs(device, &ctx.queue, scene, lm_rects.as_deref());
+        let lpv_res = lpv
+            .map(|(l, _)| crate::lpv::Lpv::new(ctx, scene, l.clone()))
+            .transpose()
+            .map_err(RasterError::Settings)?;
         let aspect = s.width as f32 / s.height as f32;
 
         // Lights and their shadow views.
@@ -852,6 +877,17 @@ impl Renderer {
                 (sh.groups(scene.instances.len()) * sh.points) as u32
             }),
             sh_groups: sh.map_or(0, |sh| sh.groups(scene.instances.len()) as u32),
+            lpv_origin: lpv_res
+                .as_ref()
+                .map_or([0.0; 3], |l| l.grid.origin.to_array()),
+            lpv_cell: lpv_res.as_ref().map_or(1.0, |l| l.grid.cell),
+            lpv_mode: lpv_res.as_ref().map_or(0, |l| match l.settings.scheme {
+                crate::lpv::LpvScheme::Kaplanyan => 1,
+                crate::lpv::LpvScheme::Wpi => 2,
+            }),
+            lpv_size: lpv_res.as_ref().map_or(1.0, |l| l.grid.n as f32),
+            lpv_indirect_only: lpv.is_some_and(|l| l.1) as u32,
+            lpv_pad: 0,
         };
         let frame_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),
@@ -969,6 +1005,27 @@ impl Renderer {
                     wgpu::TextureViewDimension::D2Array,
                 ),
                 buf(8, ro, false),
+                tex_entry(
+                    9,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D3,
+                ),
+                tex_entry(
+                    10,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D3,
+                ),
+                tex_entry(
+                    11,
+                    wgpu::TextureSampleType::Float { filterable: true },
+                    wgpu::TextureViewDimension::D3,
+                ),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 12,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
             ],
         });
         let d2 = wgpu::TextureViewDimension::D2;
@@ -1123,6 +1180,36 @@ impl Renderer {
         let (sd_view, sl_view) = (array_view(&sd), array_view(&sl));
         let (lm_view, lm_sampler) = upload_lightmaps(ctx, lightmap, sh, lm_size);
         let sh_res = ShResources::new(ctx, sh, &frame, lm_size, &frame_buf);
+        let lpv_views: Vec<wgpu::TextureView> = match &lpv_res {
+            Some(l) => l
+                .textures
+                .iter()
+                .map(|t| t.create_view(&Default::default()))
+                .collect(),
+            None => {
+                let t = device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("no lpv"),
+                    size: wgpu::Extent3d {
+                        width: 1,
+                        height: 1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D3,
+                    format: wgpu::TextureFormat::Rgba16Float,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                });
+                (0..3).map(|_| t.create_view(&Default::default())).collect()
+            }
+        };
+        let lpv_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("lpv"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
         let group2 = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shadow maps"),
             layout: &bgl2,
@@ -1136,6 +1223,10 @@ impl Renderer {
                 entry(6, sh_res.light.as_entire_binding()),
                 entry(7, wgpu::BindingResource::TextureView(&sh_res.index)),
                 entry(8, sh_res.relit.as_entire_binding()),
+                entry(9, wgpu::BindingResource::TextureView(&lpv_views[0])),
+                entry(10, wgpu::BindingResource::TextureView(&lpv_views[1])),
+                entry(11, wgpu::BindingResource::TextureView(&lpv_views[2])),
+                entry(12, wgpu::BindingResource::Sampler(&lpv_sampler)),
             ],
         });
         let group3 = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -1157,7 +1248,8 @@ impl Renderer {
             )],
         });
         let queries = ctx.has_timestamps().then(|| {
-            let count = 2 * (4 + 2 * n + views.len()) as u32;
+            let lpv_passes = lpv_res.as_ref().map_or(0, |l| 2 * l.light_count() + 1);
+            let count = 2 * (4 + 2 * n + views.len() + lpv_passes) as u32;
             let set = device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("timestamps"),
                 ty: wgpu::QueryType::Timestamp,
@@ -1202,6 +1294,7 @@ impl Renderer {
             queries,
             frame,
             sh: sh_res,
+            lpv: lpv_res,
         })
     }
 
@@ -1519,6 +1612,19 @@ impl Renderer {
         let mut labels = vec![];
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         self.relight_pass(&mut enc, &mut labels);
+        if let Some(lpv) = &self.lpv {
+            let queries = self.queries.as_ref().map(|q| &q.0);
+            let labels = &mut labels;
+            lpv.record(&mut enc, &self.scene, &mut |label| {
+                let set = queries?;
+                let i = labels.len() as u32;
+                if 2 * i + 1 >= set.count() {
+                    return None;
+                }
+                labels.push(label);
+                Some((set, 2 * i, 2 * i + 1))
+            });
+        }
         if self.settings.shadows.map() {
             self.shadow_map_passes(&mut enc, &mut labels);
         }
@@ -1527,7 +1633,9 @@ impl Renderer {
             &mut labels,
             self.settings.path == RenderPath::Deferred,
         );
-        self.light_passes(&mut enc, &mut labels);
+        if self.frame.lpv_indirect_only == 0 {
+            self.light_passes(&mut enc, &mut labels);
+        }
         // Tonemap: the 8-bit frame a viewer would display.
         {
             let ts = self.timestamps(&mut labels, "tonemap");
@@ -2098,11 +2206,11 @@ pub fn read_texture(
     tex: &wgpu::Texture,
     bpp: u32,
 ) -> Result<Vec<u8>, RasterError> {
-    let (w, h) = (tex.width(), tex.height());
+    let (w, h, layers) = (tex.width(), tex.height(), tex.depth_or_array_layers());
     let row = (w * bpp).div_ceil(256) * 256;
     let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
-        size: (row * h) as u64,
+        size: (row * h * layers) as u64,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -2128,8 +2236,8 @@ pub fn read_texture(
     let data = slice
         .get_mapped_range()
         .map_err(|e| RasterError::Readback(e.to_string()))?;
-    let mut out = Vec::with_capacity((w * h * bpp) as usize);
-    for y in 0..h {
+    let mut out = Vec::with_capacity((w * h * layers * bpp) as usize);
+    for y in 0..h * layers {
         out.extend_from_slice(&data[(y * row) as usize..][..(w * bpp) as usize]);
     }
     Ok(out)

@@ -41,6 +41,14 @@ pub struct FrameUniforms {
     pub sh_reps: u32,
     pub sh_coeff_base: u32,
     pub sh_groups: u32,
+    /// Light propagation volume: grid origin, cell size, 0 off / 1 Kaplanyan / 2 WPI, cells
+    /// per axis, 1 = indirect light only (debug view).
+    pub lpv_origin: [f32; 3],
+    pub lpv_cell: f32,
+    pub lpv_mode: u32,
+    pub lpv_size: f32,
+    pub lpv_indirect_only: u32,
+    pub lpv_pad: u32,
 }
 
 /// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional.
@@ -105,6 +113,8 @@ pub struct GpuMaterial {
 
 /// The WGSL source that declares these structs.
 pub const COMMON_WGSL: &str = include_str!("shaders/common.wgsl");
+/// The scene vertex layout and the material bind group (group 1), after common.wgsl.
+pub const MATERIAL_WGSL: &str = include_str!("shaders/material.wgsl");
 
 #[cfg(test)]
 mod tests {
@@ -143,7 +153,13 @@ mod tests {
                     sh_filter,
                     sh_reps,
                     sh_coeff_base,
-                    sh_groups
+                    sh_groups,
+                    lpv_origin,
+                    lpv_cell,
+                    lpv_mode,
+                    lpv_size,
+                    lpv_indirect_only,
+                    lpv_pad
                 ),
             ),
             (

@@ -45,6 +45,14 @@ struct FrameUniforms {
     sh_coeff_base: u32,
     // Number of groups.
     sh_groups: u32,
+    // Light propagation volume (lpv.wgsl): grid origin and cell size, 0 off / 1 Kaplanyan
+    // (irradiance) / 2 WPI (point evaluation at −n), cells per axis, 1 = indirect light only.
+    lpv_origin: vec3<f32>,
+    lpv_cell: f32,
+    lpv_mode: u32,
+    lpv_size: f32,
+    lpv_indirect_only: u32,
+    lpv_pad: u32,
 }
 
 // One light. kind: 0 point, 1 spot, 2 directional. Spot cones as cosines.

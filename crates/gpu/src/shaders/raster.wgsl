@@ -1,6 +1,6 @@
 // Rasterised lighting (issue 4): forward and deferred Phong after Fuchs (2005) §4.1, stencil
 // shadow volumes, shadow maps (depth comparison and Heidrich's linear-depth variant), projected
-// planar shadows. Compiled after common.wgsl.
+// planar shadows. Compiled after common.wgsl and material.wgsl.
 //
 // Bind groups: 0 frame (uniforms, lights, shadow views, per-pass uniforms), 1 material,
 // 2 shadow maps, 3 G-buffer (deferred lighting only).
@@ -10,12 +10,6 @@
 @group(0) @binding(2) var<storage, read> shadow_views: array<ShadowView>;
 @group(0) @binding(3) var<uniform> pass_u: PassUniforms;
 
-@group(1) @binding(0) var<uniform> material: GpuMaterial;
-@group(1) @binding(1) var base_tex: texture_2d<f32>;
-@group(1) @binding(2) var mr_tex: texture_2d<f32>;
-@group(1) @binding(3) var normal_tex: texture_2d<f32>;
-@group(1) @binding(4) var emissive_tex: texture_2d<f32>;
-@group(1) @binding(5) var tex_sampler: sampler;
 
 @group(2) @binding(0) var shadow_depth: texture_depth_2d_array;
 @group(2) @binding(1) var shadow_cmp: sampler_comparison;
@@ -30,19 +24,16 @@
 @group(2) @binding(6) var<storage, read> sh_light: array<vec4<f32>>;
 @group(2) @binding(7) var sh_index: texture_2d_array<u32>;
 @group(2) @binding(8) var<storage, read> sh_relit: array<vec4<f32>>;
+// Light propagation volume (r, g, b intensity SH per cell), trilinear.
+@group(2) @binding(9) var lpv_r: texture_3d<f32>;
+@group(2) @binding(10) var lpv_g: texture_3d<f32>;
+@group(2) @binding(11) var lpv_b: texture_3d<f32>;
+@group(2) @binding(12) var lpv_sampler: sampler;
 
 @group(3) @binding(0) var gb_diffuse: texture_2d<f32>;
 @group(3) @binding(1) var gb_normal: texture_2d<f32>;
 @group(3) @binding(2) var gb_specular: texture_2d<f32>;
 @group(3) @binding(3) var gb_position: texture_2d<f32>;
-
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) tangent: vec4<f32>,
-    @location(3) uv0: vec2<f32>,
-    @location(4) uv1: vec2<f32>,
-}
 
 struct VertexOut {
     @invariant @builtin(position) clip: vec4<f32>,
@@ -182,18 +173,11 @@ fn sh_ambient(in: VertexOut) -> vec3<f32> {
 }
 
 fn uv_for(i: u32, in: VertexOut) -> vec2<f32> {
-    if ((material.uv_sets >> i) & 1u) == 1u {
-        return in.uv1;
-    }
-    return in.uv0;
+    return material_uv(i, in.uv0, in.uv1);
 }
 
 fn base_color(in: VertexOut) -> vec4<f32> {
-    var c = material.base_color;
-    if (material.flags & 1u) != 0u {
-        c *= textureSample(base_tex, tex_sampler, uv_for(0u, in));
-    }
-    return c;
+    return material_base(in.uv0, in.uv1);
 }
 
 fn alpha_test(in: VertexOut) {
@@ -333,6 +317,43 @@ fn directional_weights(n: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(1.0 / 3.0);
 }
 
+// ---- light propagation volumes -----------------------------------------------------------------
+
+// Indirect irradiance E from the LPV at a surface (lightlab_core::lpv::Volume::irradiance).
+// Kaplanyan: read half a cell along n, incident radiance I(−ω)/s², cosine-convolved.
+// WPI (lpv-faithful): the SH evaluated at −n just off the surface, as the report's compositor.
+fn lpv_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let s = frame.lpv_cell;
+    var q = p + 0.5 * s * n;
+    if frame.lpv_mode == 2u {
+        q = p + 0.001 * s * frame.lpv_size * n;
+    }
+    let uvw = (q - frame.lpv_origin) / (s * frame.lpv_size);
+    let r = textureSampleLevel(lpv_r, lpv_sampler, uvw, 0.0);
+    let g = textureSampleLevel(lpv_g, lpv_sampler, uvw, 0.0);
+    let b = textureSampleLevel(lpv_b, lpv_sampler, uvw, 0.0);
+    let m = -n;
+    let y = vec4<f32>(0.2820948, 0.4886025 * m.y, 0.4886025 * m.z, 0.4886025 * m.x);
+    if frame.lpv_mode == 2u {
+        return max(vec3<f32>(dot(r, y), dot(g, y), dot(b, y)), vec3<f32>(0.0));
+    }
+    let k = vec4<f32>(PI, 2.0 * PI / 3.0, 2.0 * PI / 3.0, 2.0 * PI / 3.0) * y / (s * s);
+    return max(vec3<f32>(dot(r, k), dot(g, k), dot(b, k)), vec3<f32>(0.0));
+}
+
+// Everything but the per-light passes: ambient and emission (only the LPV's indirect light in
+// the indirect-only view).
+fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
+    if frame.lpv_mode != 0u {
+        let indirect = s.diffuse / PI * lpv_irradiance(s.p, s.n);
+        if frame.lpv_indirect_only == 1u {
+            return indirect;
+        }
+        return indirect + ambient(s, in, nv) + emission(in);
+    }
+    return ambient(s, in, nv) + emission(in);
+}
+
 // `nv`: the interpolated vertex normal (before the normal map), turned like s.n.
 fn ambient(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     let uv1 = in.uv1;
@@ -447,7 +468,7 @@ fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
 fn ambient_fs(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
     alpha_test(in);
     let s = surface(in, front);
-    return vec4<f32>(ambient(s, in, vertex_normal(in, front)) + emission(in), 1.0);
+    return vec4<f32>(base_radiance(s, in, vertex_normal(in, front)), 1.0);
 }
 
 // One light's contribution, blended additively (one pass per light, Fuchs §4.4).
@@ -476,7 +497,7 @@ fn gbuffer_fs(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     alpha_test(in);
     let s = surface(in, front);
     var o: GBufferOut;
-    o.accum = vec4<f32>(ambient(s, in, vertex_normal(in, front)) + emission(in), 1.0);
+    o.accum = vec4<f32>(base_radiance(s, in, vertex_normal(in, front)), 1.0);
     o.diffuse = vec4<f32>(s.diffuse, s.f0d);
     o.normal = vec4<f32>(s.n, s.roughness);
     o.specular = vec4<f32>(s.f0, f32(s.model) + min(s.transmission, 0.99));

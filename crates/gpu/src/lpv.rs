@@ -1,0 +1,828 @@
+//! Light propagation volumes on the GPU (issue 7): reflective shadow maps, injection,
+//! propagation and the 3D textures the renderer's ambient pass reads (`Renderer::with_lpv`).
+//!
+//! Per frame, [`Lpv::record`] runs, for every RSM light (directional and spot lights, and each
+//! emissive instance as a Lambertian area light seen from its centre):
+//! 1. the RSM pass: flux, normal (+ diffuse transmission), position (+ texel area ⊥ the light);
+//! 2. injection (compute): Kaplanyan scatters every texel as a cosine lobe into fixed-point
+//!    atomics (WGSL has no float atomics), and its blockers into the geometry volume; the WPI
+//!    scheme gathers per voxel.
+//!
+//! then resolves the atomics, propagates `iterations` times (ping-pong storage buffers, the
+//! accumulation in a third) and stores the result into three `Rgba16Float` 3D textures, one per
+//! colour, which the ambient pass samples trilinearly. `lightlab_core::lpv` is the CPU reference
+//! of each step; `tests/lpv.rs` compares the two.
+//!
+//! Limits: point lights are not injected (they would need six RSM faces); an emissive instance
+//! is seen through a 150° frustum from its centre (light leaving at more than 75° from its
+//! normal is not injected) and one that is not roughly planar (|Σ n·A| < ½ΣA) is skipped.
+
+use crate::GpuContext;
+use crate::gpu_scene::{GpuScene, vertex_layout};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use glam::camera::rh::proj::directx;
+use glam::camera::rh::view::look_to_mat4;
+use lightlab_core::lpv::Grid;
+use lightlab_scene::{LightKind, Scene};
+use wgpu::util::DeviceExt;
+
+/// WGSL of the LPV passes: common.wgsl, material.wgsl, lpv.wgsl.
+pub static LPV_SOURCE: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+    format!(
+        "{}\n{}\n{}",
+        crate::uniforms::COMMON_WGSL,
+        crate::uniforms::MATERIAL_WGSL,
+        include_str!("shaders/lpv.wgsl")
+    )
+});
+
+/// Which propagation scheme.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LpvScheme {
+    /// Kaplanyan & Dachsbacher (2010): flux RSM, scattered cosine lobes, 6-face propagation with
+    /// a geometry volume and accumulation; irradiance lookup (`lpv`).
+    Kaplanyan,
+    /// The WPI report (2011): gathered SH deltas, 18-neighbour additive propagation, point
+    /// evaluation at −n (`lpv-faithful`).
+    Wpi,
+}
+
+#[derive(Clone, Debug)]
+pub struct LpvSettings {
+    pub scheme: LpvScheme,
+    /// Cells per axis.
+    pub grid: u32,
+    /// Propagation steps; None = the grid size (Kaplanyan: light crosses the volume) or 2 (WPI,
+    /// as the report's Fig 6.1).
+    pub iterations: Option<u32>,
+    /// RSM side in texels.
+    pub rsm_size: u32,
+    /// Attenuate propagation by the geometry volume (Kaplanyan only).
+    pub occlusion: bool,
+    /// WPI gather injection: samples per voxel.
+    pub wpi_samples: u32,
+    /// Empty cells around the scene on each side.
+    pub margin: f32,
+}
+
+impl Default for LpvSettings {
+    fn default() -> Self {
+        LpvSettings {
+            scheme: LpvScheme::Kaplanyan,
+            grid: 32,
+            iterations: None,
+            rsm_size: 256,
+            occlusion: true,
+            wpi_samples: 16,
+            margin: 1.0,
+        }
+    }
+}
+
+impl LpvSettings {
+    pub fn iterations(&self) -> u32 {
+        self.iterations.unwrap_or(match self.scheme {
+            LpvScheme::Kaplanyan => self.grid,
+            LpvScheme::Wpi => 2,
+        })
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        if !(4..=256).contains(&self.grid) {
+            return Err(format!("LPV grid {} must be within 4..=256", self.grid));
+        }
+        if !(16..=4096).contains(&self.rsm_size) {
+            return Err(format!(
+                "RSM size {} must be within 16..=4096",
+                self.rsm_size
+            ));
+        }
+        if self.iterations() > 1024 {
+            return Err(format!(
+                "LPV iterations {} must be at most 1024",
+                self.iterations()
+            ));
+        }
+        if !(1..=256).contains(&self.wpi_samples) {
+            return Err("WPI samples per voxel must be within 1..=256".into());
+        }
+        if !(self.margin.is_finite() && (0.0..=self.grid as f32 / 4.0).contains(&self.margin)) {
+            return Err("LPV margin must be within 0..=grid/4 cells".into());
+        }
+        Ok(())
+    }
+
+    /// The volume's grid around the scene's bounds.
+    pub fn grid_for(&self, scene: &Scene) -> Grid {
+        let (lo, hi) = scene
+            .bounds()
+            .unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+        Grid::around(lo, hi, self.grid, self.margin)
+    }
+}
+
+/// WGSL `LpvUniforms`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct LpvUniforms {
+    pub origin: [f32; 3],
+    pub cell: f32,
+    pub n: u32,
+    pub use_gv: u32,
+    pub scale: f32,
+    pub gv_scale: f32,
+    pub rsm_size: u32,
+    pub wpi_samples: u32,
+    pub store_last: u32,
+    pub pad1: u32,
+}
+
+/// WGSL `RsmLight`: one light of the reflective shadow maps.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct RsmLight {
+    pub view_proj: [[f32; 4]; 4],
+    pub eye: [f32; 3],
+    /// 0 directional, 1 spot, 2 emissive area.
+    pub kind: u32,
+    pub axis: [f32; 3],
+    pub texel: f32,
+    pub color: [f32; 3],
+    pub cos_inner: f32,
+    pub cos_outer: f32,
+    pub pad0: f32,
+    pub pad1: f32,
+    pub pad2: f32,
+}
+
+/// Half-angle of the frustum an emissive instance is seen through.
+const AREA_HALF_ANGLE: f32 = 75.0 * std::f32::consts::PI / 180.0;
+/// At most this many RSM lights (the first ones of the scene).
+pub const MAX_RSM_LIGHTS: usize = 8;
+
+/// The RSM lights of a scene for a volume `grid`, with an upper bound of the flux each can put
+/// into its RSM (for the fixed-point scale).
+pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)> {
+    let half = 0.5 * grid.cell * grid.n as f32;
+    let centre = grid.origin + Vec3::splat(half);
+    let radius = half * 3f32.sqrt();
+    let mut out = Vec::new();
+    let up_for = |d: Vec3| {
+        if d.y.abs() > 0.99 { Vec3::X } else { Vec3::Y }
+    };
+    let far_from = |eye: Vec3| (eye - centre).length() + radius;
+    for l in &scene.lights {
+        let colour = l.color * l.intensity;
+        match l.kind {
+            LightKind::Directional { .. } => {
+                let d = l.direction.normalize();
+                let eye = centre - d * (radius * 1.01);
+                let view = look_to_mat4(eye, d, up_for(d));
+                let proj =
+                    directx::orthographic(-radius, radius, -radius, radius, 0.0, 2.02 * radius);
+                let texel = (2.0 * radius / size as f32).powi(2);
+                out.push((
+                    RsmLight {
+                        view_proj: (proj * view).to_cols_array_2d(),
+                        eye: eye.to_array(),
+                        kind: 0,
+                        axis: d.to_array(),
+                        texel,
+                        color: colour.to_array(),
+                        ..Default::default()
+                    },
+                    colour.max_element() * 4.0 * radius * radius,
+                ));
+            }
+            LightKind::Spot {
+                inner_cone,
+                outer_cone,
+            } => {
+                let d = l.direction.normalize();
+                let half = outer_cone.clamp(0.01, 1.48);
+                let far = far_from(l.position).max(1e-3);
+                let view = look_to_mat4(l.position, d, up_for(d));
+                let proj = directx::perspective(2.0 * half, 1.0, far * 1e-4, far);
+                let texel = (2.0 * half.tan() / size as f32).powi(2);
+                out.push((
+                    RsmLight {
+                        view_proj: (proj * view).to_cols_array_2d(),
+                        eye: l.position.to_array(),
+                        kind: 1,
+                        axis: d.to_array(),
+                        texel,
+                        color: colour.to_array(),
+                        cos_inner: inner_cone.cos(),
+                        cos_outer: outer_cone.cos(),
+                        ..Default::default()
+                    },
+                    colour.max_element() * 2.0 * std::f32::consts::PI * (1.0 - half.cos()),
+                ));
+            }
+            LightKind::Point => {}
+        }
+    }
+    for inst in &scene.instances {
+        let mesh = &scene.meshes[inst.mesh];
+        let emission = scene.materials[mesh.material].emission();
+        if emission.max_element() <= 0.0 {
+            continue;
+        }
+        let (mut area, mut na, mut ca) = (0.0f32, Vec3::ZERO, Vec3::ZERO);
+        for t in mesh.indices.chunks_exact(3) {
+            let p = [0, 1, 2].map(|k| {
+                inst.transform
+                    .transform_point3(mesh.positions[t[k] as usize])
+            });
+            let c = (p[1] - p[0]).cross(p[2] - p[0]);
+            let a = 0.5 * c.length();
+            area += a;
+            na += 0.5 * c;
+            ca += a * (p[0] + p[1] + p[2]) / 3.0;
+        }
+        if area <= 0.0 || na.length() < 0.5 * area {
+            continue;
+        }
+        let n = na.normalize();
+        let c = ca / area;
+        let eye = c + n * (1e-3 * grid.cell);
+        let far = far_from(eye).max(1e-3);
+        let view = look_to_mat4(eye, n, up_for(n));
+        let proj = directx::perspective(2.0 * AREA_HALF_ANGLE, 1.0, far * 1e-4, far);
+        let texel = (2.0 * AREA_HALF_ANGLE.tan() / size as f32).powi(2);
+        let colour = emission * area;
+        out.push((
+            RsmLight {
+                view_proj: (proj * view).to_cols_array_2d(),
+                eye: eye.to_array(),
+                kind: 2,
+                axis: n.to_array(),
+                texel,
+                color: colour.to_array(),
+                ..Default::default()
+            },
+            colour.max_element() * std::f32::consts::PI,
+        ));
+    }
+    out.truncate(MAX_RSM_LIGHTS);
+    out
+}
+
+const RSM_FORMATS: [wgpu::TextureFormat; 3] = [
+    wgpu::TextureFormat::Rgba16Float,
+    wgpu::TextureFormat::Rgba16Float,
+    wgpu::TextureFormat::Rgba32Float,
+];
+const SLOT: u64 = 256;
+
+struct Compute {
+    inject: wgpu::ComputePipeline,
+    inject_gv: wgpu::ComputePipeline,
+    resolve: wgpu::ComputePipeline,
+    propagate: wgpu::ComputePipeline,
+    inject_wpi: wgpu::ComputePipeline,
+    propagate_wpi: wgpu::ComputePipeline,
+    store: wgpu::ComputePipeline,
+}
+
+/// The GPU resources of one light propagation volume.
+pub struct Lpv {
+    pub settings: LpvSettings,
+    pub grid: Grid,
+    lights: usize,
+    rsm_pipeline: wgpu::RenderPipeline,
+    rsm_group: wgpu::BindGroup,
+    rsm_views: Vec<wgpu::TextureView>,
+    rsm_textures: Vec<wgpu::Texture>,
+    rsm_depth: wgpu::TextureView,
+    compute: Compute,
+    /// Ping-pong bind groups: [0] reads A writes B, [1] reads B writes A.
+    groups: [wgpu::BindGroup; 2],
+    lpv_atomic: wgpu::Buffer,
+    gv_atomic: wgpu::Buffer,
+    buffers: [wgpu::Buffer; 2],
+    /// The three 3D textures (r, g, b) the renderer samples.
+    pub textures: [wgpu::Texture; 3],
+}
+
+/// Bytes of one cell's 12 floats.
+const CELL_BYTES: u64 = 48;
+
+impl Lpv {
+    pub fn new(ctx: &GpuContext, scene: &Scene, settings: LpvSettings) -> Result<Lpv, String> {
+        settings.validate()?;
+        let device = &ctx.device;
+        let grid = settings.grid_for(scene);
+        let size = settings.rsm_size;
+        let lights = rsm_lights(scene, &grid, size);
+        let bound = lights.iter().map(|l| l.1).sum::<f32>().max(1e-12);
+        let n = grid.n;
+        let cells = (n as u64).pow(3);
+        let gv_cells = (n as u64 + 1).pow(3);
+        // Fixed point: the largest |coefficient| is below 1.03·Φ/π of all the RSMs' flux.
+        let base = LpvUniforms {
+            origin: grid.origin.to_array(),
+            cell: grid.cell,
+            n,
+            use_gv: 0,
+            scale: (1u32 << 30) as f32 / bound,
+            gv_scale: 65536.0,
+            rsm_size: size,
+            wpi_samples: settings.wpi_samples,
+            store_last: (settings.scheme == LpvScheme::Wpi) as u32,
+            pad1: 0,
+        };
+        let gv_on = settings.occlusion && settings.scheme == LpvScheme::Kaplanyan;
+        let mut uniform_bytes = vec![0u8; 2 * SLOT as usize];
+        for (k, use_gv) in [0u32, gv_on as u32].into_iter().enumerate() {
+            let u = LpvUniforms { use_gv, ..base };
+            let o = k * SLOT as usize;
+            uniform_bytes[o..o + std::mem::size_of::<LpvUniforms>()]
+                .copy_from_slice(bytemuck::bytes_of(&u));
+        }
+        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lpv uniforms"),
+            contents: &uniform_bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let mut light_bytes = vec![0u8; SLOT as usize * lights.len().max(1)];
+        for (i, (l, _)) in lights.iter().enumerate() {
+            let o = i * SLOT as usize;
+            light_bytes[o..o + std::mem::size_of::<RsmLight>()]
+                .copy_from_slice(bytemuck::bytes_of(l));
+        }
+        let light_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("rsm lights"),
+            contents: &light_bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let storage = |label, bytes: u64, extra| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(16),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | extra,
+                mapped_at_creation: false,
+            })
+        };
+        let lpv_atomic = storage(
+            "lpv atomics",
+            cells * CELL_BYTES,
+            wgpu::BufferUsages::empty(),
+        );
+        let gv_atomic = storage("gv atomics", gv_cells * 16, wgpu::BufferUsages::empty());
+        let read = wgpu::BufferUsages::COPY_SRC;
+        let buffers = [
+            storage("lpv a", cells * CELL_BYTES, read),
+            storage("lpv b", cells * CELL_BYTES, read),
+        ];
+        let accum = storage("lpv accumulation", cells * CELL_BYTES, read);
+        let gv = storage("geometry volume", gv_cells * 16, read);
+        let textures = ["lpv r", "lpv g", "lpv b"].map(|label| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: n,
+                    height: n,
+                    depth_or_array_layers: n,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format: wgpu::TextureFormat::Rgba16Float,
+                usage: wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        });
+        let rsm_textures: Vec<wgpu::Texture> = RSM_FORMATS
+            .iter()
+            .zip(["rsm flux", "rsm normal", "rsm position"])
+            .map(|(f, label)| {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: size,
+                        height: size,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: *f,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING
+                        | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                })
+            })
+            .collect();
+        let rsm_views: Vec<wgpu::TextureView> = rsm_textures
+            .iter()
+            .map(|t| t.create_view(&Default::default()))
+            .collect();
+        let rsm_depth = device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("rsm depth"),
+                size: wgpu::Extent3d {
+                    width: size,
+                    height: size,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Depth32Float,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                view_formats: &[],
+            })
+            .create_view(&Default::default());
+
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("lpv"),
+            source: wgpu::ShaderSource::Wgsl(LPV_SOURCE.as_str().into()),
+        });
+        use wgpu::ShaderStages as S;
+        let uniform_entry = |binding, visibility| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let rsm_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("rsm"),
+            entries: &[
+                uniform_entry(0, S::VERTEX_FRAGMENT),
+                uniform_entry(1, S::VERTEX_FRAGMENT),
+            ],
+        });
+        let material_layout = crate::gpu_scene::material_layout(device);
+        let rsm_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("rsm"),
+            bind_group_layouts: &[Some(&rsm_layout), Some(&material_layout)],
+            immediate_size: 0,
+        });
+        let targets: Vec<Option<wgpu::ColorTargetState>> =
+            RSM_FORMATS.iter().map(|f| Some((*f).into())).collect();
+        let rsm_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("rsm"),
+            layout: Some(&rsm_pl),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("rsm_vs"),
+                compilation_options: Default::default(),
+                buffers: &[Some(vertex_layout())],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("rsm_fs"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        fn uniform_binding(
+            binding: u32,
+            buffer: &wgpu::Buffer,
+            size: usize,
+        ) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size as u64),
+                }),
+            }
+        }
+        let rsm_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("rsm"),
+            layout: &rsm_layout,
+            entries: &[
+                uniform_binding(0, &uniforms, std::mem::size_of::<LpvUniforms>()),
+                uniform_binding(1, &light_buf, std::mem::size_of::<RsmLight>()),
+            ],
+        });
+
+        let texture_entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: S::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let storage_entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: S::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let out_entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: S::COMPUTE,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: wgpu::TextureFormat::Rgba16Float,
+                view_dimension: wgpu::TextureViewDimension::D3,
+            },
+            count: None,
+        };
+        let compute_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lpv compute"),
+            entries: &[
+                uniform_entry(0, S::COMPUTE),
+                uniform_entry(1, S::COMPUTE),
+                texture_entry(2),
+                texture_entry(3),
+                texture_entry(4),
+                storage_entry(5, false),
+                storage_entry(6, false),
+                storage_entry(7, true),
+                storage_entry(8, false),
+                storage_entry(9, false),
+                storage_entry(10, false),
+                out_entry(11),
+                out_entry(12),
+                out_entry(13),
+            ],
+        });
+        let compute_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lpv compute"),
+            bind_group_layouts: &[Some(&compute_layout)],
+            immediate_size: 0,
+        });
+        let cp = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&compute_pl),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let compute = Compute {
+            inject: cp("inject_cs"),
+            inject_gv: cp("inject_gv_cs"),
+            resolve: cp("resolve_cs"),
+            propagate: cp("propagate_cs"),
+            inject_wpi: cp("inject_wpi_cs"),
+            propagate_wpi: cp("propagate_wpi_cs"),
+            store: cp("store_cs"),
+        };
+        let out_views: Vec<wgpu::TextureView> = textures
+            .iter()
+            .map(|t| t.create_view(&Default::default()))
+            .collect();
+        let group = |src: &wgpu::Buffer, dst: &wgpu::Buffer| {
+            let e = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("lpv compute"),
+                layout: &compute_layout,
+                entries: &[
+                    uniform_binding(0, &uniforms, std::mem::size_of::<LpvUniforms>()),
+                    uniform_binding(1, &light_buf, std::mem::size_of::<RsmLight>()),
+                    e(2, wgpu::BindingResource::TextureView(&rsm_views[0])),
+                    e(3, wgpu::BindingResource::TextureView(&rsm_views[1])),
+                    e(4, wgpu::BindingResource::TextureView(&rsm_views[2])),
+                    e(5, lpv_atomic.as_entire_binding()),
+                    e(6, gv_atomic.as_entire_binding()),
+                    e(7, src.as_entire_binding()),
+                    e(8, dst.as_entire_binding()),
+                    e(9, accum.as_entire_binding()),
+                    e(10, gv.as_entire_binding()),
+                    e(11, wgpu::BindingResource::TextureView(&out_views[0])),
+                    e(12, wgpu::BindingResource::TextureView(&out_views[1])),
+                    e(13, wgpu::BindingResource::TextureView(&out_views[2])),
+                ],
+            })
+        };
+        let groups = [
+            group(&buffers[0], &buffers[1]),
+            group(&buffers[1], &buffers[0]),
+        ];
+        Ok(Lpv {
+            settings,
+            grid,
+            lights: lights.len(),
+            rsm_pipeline,
+            rsm_group,
+            rsm_views,
+            rsm_textures,
+            rsm_depth,
+            compute,
+            groups,
+            lpv_atomic,
+            gv_atomic,
+            buffers,
+            textures,
+        })
+    }
+
+    /// Number of RSM lights (directional, spot, emissive instances).
+    pub fn light_count(&self) -> usize {
+        self.lights
+    }
+
+    /// The RSM textures (flux, normal, position) of the last light rendered.
+    pub fn rsm_textures(&self) -> &[wgpu::Texture] {
+        &self.rsm_textures
+    }
+
+    /// Record the LPV passes of one frame. `ts(label, compute)` hands out timestamp writes.
+    pub fn record<'q>(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        ts: &mut dyn FnMut(&'static str) -> Option<(&'q wgpu::QuerySet, u32, u32)>,
+    ) {
+        let n = self.grid.n;
+        let wg3 = n.div_ceil(4);
+        let wg_gv = (n + 1).div_ceil(4);
+        let wg_rsm = self.settings.rsm_size.div_ceil(8);
+        let wpi = self.settings.scheme == LpvScheme::Wpi;
+        enc.clear_buffer(&self.lpv_atomic, 0, None);
+        enc.clear_buffer(&self.gv_atomic, 0, None);
+        if wpi {
+            // The gather injection adds into buffer A, light by light.
+            enc.clear_buffer(&self.buffers[0], 0, None);
+        }
+        let compute_ts = |t: Option<(&'q wgpu::QuerySet, u32, u32)>| {
+            t.map(|(query_set, b, e)| wgpu::ComputePassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(b),
+                end_of_pass_write_index: Some(e),
+            })
+        };
+        for li in 0..self.lights {
+            let light_offset = (li as u64 * SLOT) as u32;
+            {
+                let t = ts("lpv rsm");
+                let color = |v| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: v,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
+                };
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("lpv rsm"),
+                    color_attachments: &[
+                        color(&self.rsm_views[0]),
+                        color(&self.rsm_views[1]),
+                        color(&self.rsm_views[2]),
+                    ],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &self.rsm_depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: t.map(|(query_set, b, e)| wgpu::RenderPassTimestampWrites {
+                        query_set,
+                        beginning_of_pass_write_index: Some(b),
+                        end_of_pass_write_index: Some(e),
+                    }),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.rsm_pipeline);
+                pass.set_bind_group(0, &self.rsm_group, &[0, light_offset]);
+                pass.set_vertex_buffer(0, scene.vertices.slice(..));
+                pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+                for (ii, d) in scene.draws.iter().enumerate() {
+                    pass.set_bind_group(1, &scene.materials[d.material].bind_group, &[]);
+                    pass.draw_indexed(
+                        d.first_index..d.first_index + d.index_count,
+                        0,
+                        ii as u32..ii as u32 + 1,
+                    );
+                }
+            }
+            let t = ts("lpv inject");
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("lpv inject"),
+                timestamp_writes: compute_ts(t),
+            });
+            pass.set_bind_group(0, &self.groups[1], &[0, light_offset]);
+            if wpi {
+                // Group 1 writes buffer A.
+                pass.set_pipeline(&self.compute.inject_wpi);
+                pass.dispatch_workgroups(wg3, wg3, wg3);
+            } else {
+                pass.set_pipeline(&self.compute.inject);
+                pass.dispatch_workgroups(wg_rsm, wg_rsm, 1);
+                pass.set_pipeline(&self.compute.inject_gv);
+                pass.dispatch_workgroups(wg_rsm, wg_rsm, 1);
+            }
+        }
+        let t = ts("lpv propagate");
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("lpv propagate"),
+            timestamp_writes: compute_ts(t),
+        });
+        // The seed lands in buffer A (group 1's destination) and the accumulation.
+        let mut current = 0; // the group whose source holds the latest light
+        if !wpi {
+            pass.set_pipeline(&self.compute.resolve);
+            pass.set_bind_group(0, &self.groups[1], &[0, 0]);
+            pass.dispatch_workgroups(wg_gv, wg_gv, wg_gv);
+        }
+        for i in 0..self.settings.iterations() {
+            let uniform = if i == 0 { 0 } else { SLOT as u32 };
+            pass.set_pipeline(if wpi {
+                &self.compute.propagate_wpi
+            } else {
+                &self.compute.propagate
+            });
+            pass.set_bind_group(0, &self.groups[current], &[uniform, 0]);
+            pass.dispatch_workgroups(wg3, wg3, wg3);
+            current = 1 - current;
+        }
+        pass.set_pipeline(&self.compute.store);
+        pass.set_bind_group(0, &self.groups[current], &[0, 0]);
+        pass.dispatch_workgroups(wg3, wg3, wg3);
+    }
+
+    /// Read the stored volume back (cells in x-fastest order, r/g/b SH per cell).
+    pub fn read_volume(&self, ctx: &GpuContext) -> Result<lightlab_core::lpv::Volume, String> {
+        let mut vol = lightlab_core::lpv::Volume::new(self.grid);
+        for (ch, tex) in self.textures.iter().enumerate() {
+            let data = crate::raster::read_texture(ctx, tex, 8).map_err(|e| e.to_string())?;
+            let halves: &[u16] = bytemuck::cast_slice(&data);
+            for (i, cell) in vol.cells.iter_mut().enumerate() {
+                for k in 0..4 {
+                    cell[ch][k] = half::f16::from_bits(halves[i * 4 + k]).to_f32();
+                }
+            }
+        }
+        Ok(vol)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::check_struct;
+    use crate::rust_layout;
+
+    #[test]
+    fn lpv_structs_match_the_wgsl_layout() {
+        let src = LPV_SOURCE.as_str();
+        check_struct(
+            src,
+            "LpvUniforms",
+            &rust_layout!(
+                LpvUniforms,
+                origin,
+                cell,
+                n,
+                use_gv,
+                scale,
+                gv_scale,
+                rsm_size,
+                wpi_samples,
+                store_last,
+                pad1
+            ),
+        )
+        .unwrap();
+        check_struct(
+            src,
+            "RsmLight",
+            &rust_layout!(
+                RsmLight, view_proj, eye, kind, axis, texel, color, cos_inner, cos_outer, pad0,
+                pad1, pad2
+            ),
+        )
+        .unwrap();
+    }
+}

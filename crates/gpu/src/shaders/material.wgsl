@@ -1,0 +1,33 @@
+// The scene's vertex layout and material bind group (group 1), shared by the renderer and the
+// LPV's reflective shadow maps. Compiled after common.wgsl.
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) tangent: vec4<f32>,
+    @location(3) uv0: vec2<f32>,
+    @location(4) uv1: vec2<f32>,
+}
+
+@group(1) @binding(0) var<uniform> material: GpuMaterial;
+@group(1) @binding(1) var base_tex: texture_2d<f32>;
+@group(1) @binding(2) var mr_tex: texture_2d<f32>;
+@group(1) @binding(3) var normal_tex: texture_2d<f32>;
+@group(1) @binding(4) var emissive_tex: texture_2d<f32>;
+@group(1) @binding(5) var tex_sampler: sampler;
+
+// The UV set texture `i` reads (bit i of uv_sets).
+fn material_uv(i: u32, uv0: vec2<f32>, uv1: vec2<f32>) -> vec2<f32> {
+    if ((material.uv_sets >> i) & 1u) == 1u {
+        return uv1;
+    }
+    return uv0;
+}
+
+fn material_base(uv0: vec2<f32>, uv1: vec2<f32>) -> vec4<f32> {
+    var c = material.base_color;
+    if (material.flags & 1u) != 0u {
+        c *= textureSample(base_tex, tex_sampler, material_uv(0u, uv0, uv1));
+    }
+    return c;
+}
