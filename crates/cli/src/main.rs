@@ -6,6 +6,7 @@
 mod bake_cmd;
 mod bench;
 mod demo;
+mod lpv_cmd;
 mod prt_cmd;
 mod raster_cmd;
 mod render;
@@ -118,6 +119,8 @@ enum Command {
         baked: Option<PathBuf>,
         #[command(flatten)]
         sh: prt_cmd::ShArgs,
+        #[command(flatten)]
+        lpv: lpv_cmd::LpvArgs,
     },
     /// Spherical harmonics of environment maps: coefficients and irradiance maps.
     #[command(subcommand)]
@@ -248,6 +251,8 @@ fn run(cli: Cli) -> Result<()> {
                 println!("RMSE   {:.6}", c.rmse);
                 println!("relMSE {:.6}", c.relmse);
                 println!("FLIP   {:.6}", c.flip);
+                let m = c.mean_ratio;
+                println!("mean A/B {:.4} {:.4} {:.4}", m[0], m[1], m[2]);
             }
             Ok(())
         }
@@ -264,6 +269,7 @@ fn run(cli: Cli) -> Result<()> {
             bake,
             baked,
             sh,
+            lpv,
         } => {
             if matches!(what, bench::BenchKind::Bake) {
                 return bench::bench_bake(&scene, &bake, json);
@@ -279,6 +285,7 @@ fn run(cli: Cli) -> Result<()> {
                     &bake,
                     baked.as_deref(),
                     &sh,
+                    &lpv,
                     json,
                 );
             }

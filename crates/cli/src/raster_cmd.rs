@@ -239,16 +239,19 @@ pub fn bench_frame(
     bake: &crate::bake_cmd::BakeArgs,
     baked: Option<&std::path::Path>,
     sh: &crate::prt_cmd::ShArgs,
+    lpv: &crate::lpv_cmd::LpvArgs,
     json: bool,
 ) -> Result<()> {
+    let lpv_technique = crate::lpv_cmd::LPV_TECHNIQUES.contains(&technique);
     let lightmapped = crate::bake_cmd::LIGHTMAP_TECHNIQUES.contains(&technique);
     let sh_technique = crate::prt_cmd::SH_TECHNIQUES.contains(&technique);
     anyhow::ensure!(
-        RASTER_TECHNIQUES.contains(&technique) || lightmapped || sh_technique,
-        "bench frame needs a GPU technique ({}, {}, {})",
+        RASTER_TECHNIQUES.contains(&technique) || lightmapped || sh_technique || lpv_technique,
+        "bench frame needs a GPU technique ({}, {}, {}, {})",
         RASTER_TECHNIQUES.join(", "),
         crate::bake_cmd::LIGHTMAP_TECHNIQUES.join(", "),
-        crate::prt_cmd::SH_TECHNIQUES.join(", ")
+        crate::prt_cmd::SH_TECHNIQUES.join(", "),
+        crate::lpv_cmd::LPV_TECHNIQUES.join(", ")
     );
     anyhow::ensure!(
         (1..=10_000).contains(&f.frames),
@@ -284,6 +287,8 @@ pub fn bench_frame(
             crate::prt_cmd::sh_renderer(&ctx, &data, technique, a, sh, f.width, f.height, 0)?;
         projector = Some((p, data.scene().clone()));
         r
+    } else if lpv_technique {
+        crate::lpv_cmd::lpv_renderer(&ctx, scene, technique, a, lpv, f.width, f.height, 0)?
     } else {
         Renderer::new(&ctx, scene, settings(technique, a, f.width, f.height, 0)?)?
     };

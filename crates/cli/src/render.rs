@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// Techniques `lightlab render` knows of, with whether they are built yet.
-pub const TECHNIQUES: [(&str, bool); 12] = [
+pub const TECHNIQUES: [(&str, bool); 14] = [
     ("reference", true),
     ("direct", true),
     ("phong", true),
@@ -24,6 +24,8 @@ pub const TECHNIQUES: [(&str, bool); 12] = [
     ("shl", true),
     ("shl-compressed", true),
     ("shl-normalmapped", false),
+    ("lpv", true),
+    ("lpv-faithful", true),
 ];
 
 #[derive(Args)]
@@ -35,8 +37,9 @@ pub struct RenderArgs {
     /// technique: `phong`, `phong-shadow-volumes`, `phong-shadow-maps`, `lightmap` (baked
     /// light only) or `lightmap+phong` (baked indirect light plus dynamic lights and shadow
     /// volumes); the SH techniques `prt-vertex`, `prt-textured`, `shl`, `shl-compressed`
-    /// (transfer × the scene's lights projected on SH). The light-map and SH light-map
-    /// techniques read `--baked DIR` or bake first.
+    /// (transfer × the scene's lights projected on SH); the light propagation volumes `lpv`
+    /// and `lpv-faithful` (shadow-mapped direct light + one bounce from the volume). The
+    /// light-map and SH light-map techniques read `--baked DIR` or bake first.
     #[arg(long, default_value = "reference")]
     pub technique: String,
     /// Folder of baked data, for techniques that use it.
@@ -85,6 +88,8 @@ pub struct RenderArgs {
     pub bake: crate::bake_cmd::BakeArgs,
     #[command(flatten)]
     pub sh: crate::prt_cmd::ShArgs,
+    #[command(flatten)]
+    pub lpv: crate::lpv_cmd::LpvArgs,
     /// Output image: .exr (linear) or .png (tone-mapped sRGB).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -153,6 +158,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if crate::raster_cmd::RASTER_TECHNIQUES.contains(&a.technique.as_str())
         || crate::bake_cmd::LIGHTMAP_TECHNIQUES.contains(&a.technique.as_str())
         || crate::prt_cmd::SH_TECHNIQUES.contains(&a.technique.as_str())
+        || crate::lpv_cmd::LPV_TECHNIQUES.contains(&a.technique.as_str())
     {
         return run_raster(&a, &scene);
     }
@@ -226,6 +232,8 @@ fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
         let data =
             crate::prt_cmd::sh_data_for(scene, &a.technique, a.baked.as_deref(), &a.bake, &a.sh)?;
         crate::prt_cmd::render_sh(&ctx, &data, &a.technique, &a.raster, &a.sh, w, h, a.camera)?
+    } else if crate::lpv_cmd::LPV_TECHNIQUES.contains(&a.technique.as_str()) {
+        crate::lpv_cmd::render_lpv(&ctx, scene, &a.technique, &a.raster, &a.lpv, w, h, a.camera)?
     } else {
         crate::raster_cmd::render_raster(&ctx, scene, &a.technique, &a.raster, w, h, a.camera)?
     };

@@ -808,3 +808,96 @@ fn prt_vertex_renders_without_a_bake() {
     let img = lightlab_core::image::Image::read(&png).unwrap();
     assert!(img.mean().max_element() > 0.02, "lit: {:?}", img.mean());
 }
+
+#[test]
+fn lpv_techniques_render_and_reject_bad_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut means = vec![];
+    for (t, view) in [
+        ("lpv", "final"),
+        ("lpv", "indirect"),
+        ("lpv-faithful", "indirect"),
+    ] {
+        let exr = dir.path().join(format!("{t}-{view}.exr"));
+        let o = lightlab(&[
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            t,
+            "--debug-view",
+            view,
+            "--lpv-grid",
+            "16",
+            "--rsm-size",
+            "64",
+            "--width",
+            "32",
+            "--json",
+            "-o",
+            exr.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{t}: {}", stderr(&o));
+        let img = lightlab_core::image::Image::read(&exr).unwrap();
+        means.push(img.mean().max_element());
+    }
+    // The indirect view holds light (the area light's bounce) and less than the full frame
+    // (which adds the emitter).
+    assert!(means[1] > 0.0 && means[1] < means[0], "{means:?}");
+    assert!(means[2] > 0.0);
+    let out = dir.path().join("x.png");
+    for bad in [["--lpv-grid", "2"], ["--rsm-size", "8"]] {
+        let o = lightlab(&[
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            "lpv",
+            bad[0],
+            bad[1],
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(!o.status.success());
+        assert!(
+            stderr(&o).contains(&bad[0][2..6]) || stderr(&o).contains("must be"),
+            "{}",
+            stderr(&o)
+        );
+        assert!(!out.exists(), "no output on error");
+    }
+}
+
+#[test]
+fn reference_renders_exactly_one_indirect_bounce() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |extra: &[&str], name: &str| {
+        let exr = dir.path().join(name);
+        let mut args = vec![
+            "render", "--scene", "cornell", "--spp", "16", "--width", "24", "-o",
+        ];
+        args.push(exr.to_str().unwrap());
+        args.extend_from_slice(extra);
+        let o = lightlab(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        lightlab_core::image::Image::read(&exr)
+            .unwrap()
+            .mean()
+            .max_element()
+    };
+    let all = render(&[], "all.exr");
+    let one = render(&["--indirect-only"], "one.exr");
+    let two = render(&["--indirect-only", "--bounces", "2"], "two.exr");
+    assert!(one > 0.0 && one < all && two < one, "{all} {one} {two}");
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "cornell",
+        "--technique",
+        "direct",
+        "--indirect-only",
+        "-o",
+        dir.path().join("d.exr").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+}

@@ -28,6 +28,8 @@ pub struct Comparison {
     pub rmse: f64,
     pub relmse: f64,
     pub flip: f64,
+    /// Mean of A over mean of B, per channel (a global brightness bias).
+    pub mean_ratio: [f64; 3],
 }
 
 fn check(a: &Image, b: &Image) -> Result<(), MetricsError> {
@@ -86,6 +88,10 @@ pub fn compare(a: &Image, reference: &Image, ldr: LdrSettings) -> Result<Compari
         rmse: rmse(a, reference)?,
         relmse: relmse(a, reference)?,
         flip: flip(a, reference, ldr)?,
+        mean_ratio: {
+            let (ma, mb) = (a.mean().as_dvec3(), reference.mean().as_dvec3());
+            [0, 1, 2].map(|k| if mb[k] > 0.0 { ma[k] / mb[k] } else { f64::NAN })
+        },
     })
 }
 

@@ -171,3 +171,109 @@ fn wpi_propagation_on_the_gpu_grows_like_the_report() {
         "the report's scheme is not conservative: ×{growth}"
     );
 }
+
+/// The reference's light after exactly one bounce (path depth 2), at 64×64.
+fn reference_one_bounce(scene: &Scene) -> lightlab_core::image::Image {
+    let accel = lightlab_trace::Accel::new(scene);
+    let pt = lightlab_trace::PathTracer::new(scene, &accel);
+    let s = lightlab_trace::RenderSettings {
+        width: 64,
+        height: 64,
+        spp: 512,
+        min_depth: 2,
+        max_depth: 2,
+        ..Default::default()
+    };
+    pt.render(&s, &|_, _| true).unwrap()
+}
+
+/// Per channel, the constant c minimising relMSE of c·A against R (weighted least squares with
+/// relMSE's weights 1/(R² + 0.01)).
+fn fit_constant(a: &lightlab_core::image::Image, r: &lightlab_core::image::Image) -> Vec3 {
+    let mut c = [0.0f32; 3];
+    for k in 0..3 {
+        let (mut num, mut den) = (0.0f64, 0.0f64);
+        for (x, y) in a.data.iter().zip(&r.data) {
+            let (x, y) = (x[k] as f64, y[k] as f64);
+            let w = 1.0 / (y * y + 0.01);
+            num += w * x * y;
+            den += w * x * x;
+        }
+        c[k] = (num / den.max(1e-30)) as f32;
+    }
+    Vec3::from_array(c)
+}
+
+#[test]
+fn lpv_indirect_light_on_cornell_against_one_bounce_of_the_reference() {
+    // Issue 7's measurement: indirect light only, against a path-traced reference of exactly one
+    // bounce, beside the best constant ambient term and lpv-faithful. The issue's target (lpv at
+    // most half the ambient's relMSE) is NOT met yet (docs/lpv.md: lpv 3.17, ambient 0.41 on this
+    // normalised scale); this test pins what holds: lpv beats the report's scheme, and does not
+    // regress.
+    let Some(ctx) = test_context() else { return };
+    let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
+    let reference = reference_one_bounce(&scene);
+    let render = |scheme| {
+        let s = LpvSettings {
+            scheme,
+            ..Default::default()
+        };
+        let mut r = render_lpv(&ctx, &scene, &s);
+        r.render(&ctx);
+        r.read_hdr(&ctx).unwrap()
+    };
+    // relMSE's ε = 0.01 assumes values near 1: all images are scaled so that the reference's
+    // mean luminance is 1 (the comparison is then independent of the light's intensity).
+    let k = 1.0 / lightlab_core::color::luminance(reference.mean()).max(1e-12);
+    let scaled = |img: &lightlab_core::image::Image| {
+        let mut o = img.clone();
+        for p in &mut o.data {
+            *p *= k;
+        }
+        o
+    };
+    let reference = scaled(&reference);
+    let lpv_img = scaled(&render(LpvScheme::Kaplanyan));
+    let lpv = lightlab_core::metrics::relmse(&lpv_img, &reference).unwrap();
+    if let Ok(dir) = std::env::var("LIGHTLAB_TEST_OUT") {
+        let ldr = lightlab_core::image::LdrSettings::default();
+        let _ = lpv_img.write(&std::path::Path::new(&dir).join("lpv_cornell.png"), ldr);
+        let _ = reference.write(&std::path::Path::new(&dir).join("lpv_cornell_ref.png"), ldr);
+        let err = lightlab_core::image::Image::from_fn(64, 64, |x, y| {
+            let (a, b) = (lpv_img.get(x, y), reference.get(x, y));
+            (a - b) * (a - b) / (b * b + Vec3::splat(0.01))
+        });
+        let _ = err.write(&std::path::Path::new(&dir).join("lpv_cornell_err.exr"), ldr);
+        let _ = err.write(&std::path::Path::new(&dir).join("lpv_cornell_err.png"), ldr);
+    }
+    let wpi = lightlab_core::metrics::relmse(&scaled(&render(LpvScheme::Wpi)), &reference).unwrap();
+    // Diffuse albedo: a unit constant sky, no lights, no emission.
+    let mut plain = scene.clone();
+    plain.lights.clear();
+    for m in &mut plain.materials {
+        m.emissive = Vec3::ZERO;
+    }
+    let rs = RasterSettings {
+        width: 64,
+        height: 64,
+        shadows: ShadowMethod::None,
+        ambient: Ambient::Constant(Vec3::ONE),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &plain, rs).unwrap();
+    r.render(&ctx);
+    let albedo = r.read_hdr(&ctx).unwrap();
+    let c = fit_constant(&albedo, &reference);
+    let mut ambient = albedo.clone();
+    for p in &mut ambient.data {
+        *p *= c;
+    }
+    let amb = lightlab_core::metrics::relmse(&ambient, &reference).unwrap();
+    eprintln!(
+        "cornell, one indirect bounce, 64²: relMSE lpv {lpv:.4}, lpv-faithful {wpi:.4}, fitted ambient {amb:.4} (c = {c})"
+    );
+    assert!(lpv < 0.5 * wpi, "lpv {lpv} vs lpv-faithful {wpi}");
+    assert!(lpv < 3.5, "lpv regressed: {lpv} (was 3.17)");
+    assert!(amb < 0.5, "the fitted ambient baseline: {amb}");
+}
