@@ -335,36 +335,38 @@ pub const AXES: [IVec3; 6] = [
 /// volume, light crossing into the receiving cell is attenuated by its transmittance.
 pub fn propagate_step(src: &Volume, occlusion: Option<&Occlusion>) -> Volume {
     let g = src.grid;
+    // Per axis d, the receiving cell's 5 faces: the direction from the source centre to the
+    // face centre, and the cosine lobe around the face normal scaled by ΔΩ/π.
+    let faces: [[(Vec3, Sh4); 5]; 6] = AXES.map(|d| {
+        let dv = d.as_vec3();
+        let mut f = [(
+            dv,
+            scaled(&cosine_lobe(dv), SOLID_ANGLE_FAR / std::f32::consts::PI),
+        ); 5];
+        let sides = AXES.iter().filter(|s| **s != d && **s != -d);
+        for (k, side) in sides.enumerate() {
+            let sv = side.as_vec3();
+            let lobe = scaled(&cosine_lobe(sv), SOLID_ANGLE_SIDE / std::f32::consts::PI);
+            f[k + 1] = ((dv + 0.5 * sv).normalize(), lobe);
+        }
+        f
+    });
     let mut out = Volume::new(g);
     for c in g.cells() {
         let mut acc = [[0.0f32; 4]; 3];
-        for d in AXES {
-            let s = c - d;
+        for (d, faces) in AXES.iter().zip(&faces) {
+            let s = c - *d;
             if !g.contains(s) {
                 continue;
             }
             let from = src.at(s);
-            let dv = d.as_vec3();
-            let t = occlusion.map_or(1.0, |o| o.transmittance(s, d, dv));
+            let t = occlusion.map_or(1.0, |o| o.transmittance(s, *d, d.as_vec3()));
             if t <= 0.0 {
                 continue;
             }
-            // Far face: direction d, re-emitted around d.
-            let mut faces = [(dv, dv, SOLID_ANGLE_FAR); 5];
-            let mut k = 1;
-            for side in AXES {
-                if side == d || side == -d {
-                    continue;
-                }
-                let sv = side.as_vec3();
-                faces[k] = ((dv + 0.5 * sv).normalize(), sv, SOLID_ANGLE_SIDE);
-                k += 1;
-            }
-            for (w, normal, solid) in faces {
-                let lobe = scaled(&cosine_lobe(normal), t * solid / std::f32::consts::PI);
+            for (w, lobe) in faces {
                 for ch in 0..3 {
-                    let flux = eval(&from[ch], w);
-                    add_to(&mut acc[ch], &lobe, flux);
+                    add_to(&mut acc[ch], lobe, t * eval(&from[ch], *w));
                 }
             }
         }

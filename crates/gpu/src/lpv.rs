@@ -5,8 +5,8 @@
 //! emissive instance as a Lambertian area light seen from its centre):
 //! 1. the RSM pass: flux, normal (+ diffuse transmission), position (+ texel area ⊥ the light);
 //! 2. injection (compute): Kaplanyan scatters every texel as a cosine lobe into fixed-point
-//!    atomics (WGSL has no float atomics), and its blockers into the geometry volume; the WPI
-//!    scheme gathers per voxel.
+//!    atomics (WGSL has no float atomics) and, with occlusion, its blocker into the geometry
+//!    volume in the same dispatch; the WPI scheme gathers per voxel.
 //!
 //! then resolves the atomics, propagates `iterations` times (ping-pong storage buffers, the
 //! accumulation in a third) and stores the result into three `Rgba16Float` 3D textures, one per
@@ -135,7 +135,8 @@ pub struct LpvUniforms {
     pub rsm_size: u32,
     pub wpi_samples: u32,
     pub store_last: u32,
-    pub pad1: u32,
+    /// 1: the injection also fills the geometry volume.
+    pub occlusion: u32,
 }
 
 /// WGSL `RsmLight`: one light of the reflective shadow maps.
@@ -278,7 +279,6 @@ const SLOT: u64 = 256;
 
 struct Compute {
     inject: wgpu::ComputePipeline,
-    inject_gv: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
     propagate: wgpu::ComputePipeline,
     inject_wpi: wgpu::ComputePipeline,
@@ -331,9 +331,13 @@ impl Lpv {
             rsm_size: size,
             wpi_samples: settings.wpi_samples,
             store_last: (settings.scheme == LpvScheme::Wpi) as u32,
-            pad1: 0,
+            occlusion: 0,
         };
         let gv_on = settings.occlusion && settings.scheme == LpvScheme::Kaplanyan;
+        let base = LpvUniforms {
+            occlusion: gv_on as u32,
+            ..base
+        };
         let mut uniform_bytes = vec![0u8; 2 * SLOT as usize];
         for (k, use_gv) in [0u32, gv_on as u32].into_iter().enumerate() {
             let u = LpvUniforms { use_gv, ..base };
@@ -400,44 +404,33 @@ impl Lpv {
             .iter()
             .zip(["rsm flux", "rsm normal", "rsm position"])
             .map(|(f, label)| {
-                device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width: size,
-                        height: size,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: *f,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                crate::raster::texture(
+                    device,
+                    label,
+                    size,
+                    size,
+                    1,
+                    *f,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT
                         | wgpu::TextureUsages::TEXTURE_BINDING
                         | wgpu::TextureUsages::COPY_SRC,
-                    view_formats: &[],
-                })
+                )
             })
             .collect();
         let rsm_views: Vec<wgpu::TextureView> = rsm_textures
             .iter()
             .map(|t| t.create_view(&Default::default()))
             .collect();
-        let rsm_depth = device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("rsm depth"),
-                size: wgpu::Extent3d {
-                    width: size,
-                    height: size,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Depth32Float,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
+        let rsm_depth = crate::raster::texture(
+            device,
+            "rsm depth",
+            size,
+            size,
+            1,
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&Default::default());
 
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lpv"),
@@ -585,7 +578,6 @@ impl Lpv {
         };
         let compute = Compute {
             inject: cp("inject_cs"),
-            inject_gv: cp("inject_gv_cs"),
             resolve: cp("resolve_cs"),
             propagate: cp("propagate_cs"),
             inject_wpi: cp("inject_wpi_cs"),
@@ -740,8 +732,6 @@ impl Lpv {
             } else {
                 pass.set_pipeline(&self.compute.inject);
                 pass.dispatch_workgroups(wg_rsm, wg_rsm, 1);
-                pass.set_pipeline(&self.compute.inject_gv);
-                pass.dispatch_workgroups(wg_rsm, wg_rsm, 1);
             }
         }
         let t = ts("lpv propagate");
@@ -811,7 +801,7 @@ mod tests {
                 rsm_size,
                 wpi_samples,
                 store_last,
-                pad1
+                occlusion
             ),
         )
         .unwrap();

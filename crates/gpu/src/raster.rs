@@ -531,7 +531,23 @@ impl ShResources {
     }
 }
 
-fn texture(
+/// The next pair of timestamp queries for a pass named `label` (recorded in `labels`), if the
+/// adapter has timestamps and the query set has room.
+fn timestamp_slot<'q>(
+    queries: Option<&'q (wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
+    labels: &mut Vec<&'static str>,
+    label: &'static str,
+) -> Option<(&'q wgpu::QuerySet, u32, u32)> {
+    let (set, _, _) = queries?;
+    let i = labels.len() as u32;
+    if 2 * i + 1 >= set.count() {
+        return None;
+    }
+    labels.push(label);
+    Some((set, 2 * i, 2 * i + 1))
+}
+
+pub(crate) fn texture(
     device: &wgpu::Device,
     label: &str,
     w: u32,
@@ -1458,16 +1474,11 @@ impl Renderer {
         labels: &mut Vec<&'static str>,
         label: &'static str,
     ) -> Option<wgpu::RenderPassTimestampWrites<'q>> {
-        let (set, _, _) = self.queries.as_ref()?;
-        let i = labels.len() as u32;
-        if 2 * i + 1 >= set.count() {
-            return None;
-        }
-        labels.push(label);
+        let (set, begin, end) = timestamp_slot(self.queries.as_ref(), labels, label)?;
         Some(wgpu::RenderPassTimestampWrites {
             query_set: set,
-            beginning_of_pass_write_index: Some(2 * i),
-            end_of_pass_write_index: Some(2 * i + 1),
+            beginning_of_pass_write_index: Some(begin),
+            end_of_pass_write_index: Some(end),
         })
     }
 
@@ -1613,16 +1624,10 @@ impl Renderer {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         self.relight_pass(&mut enc, &mut labels);
         if let Some(lpv) = &self.lpv {
-            let queries = self.queries.as_ref().map(|q| &q.0);
+            let queries = self.queries.as_ref();
             let labels = &mut labels;
             lpv.record(&mut enc, &self.scene, &mut |label| {
-                let set = queries?;
-                let i = labels.len() as u32;
-                if 2 * i + 1 >= set.count() {
-                    return None;
-                }
-                labels.push(label);
-                Some((set, 2 * i, 2 * i + 1))
+                timestamp_slot(queries, labels, label)
             });
         }
         if self.settings.shadows.map() {

@@ -30,7 +30,8 @@ struct LpvUniforms {
     wpi_samples: u32,
     // 1: store the last propagated volume (WPI) instead of the accumulation.
     store_last: u32,
-    pad1: u32,
+    // 1: the injection also fills the geometry volume.
+    occlusion: u32,
 }
 
 // One light of the reflective shadow maps.
@@ -176,7 +177,8 @@ fn inject_vpl(p: vec3<f32>, n: vec3<f32>, flux: vec3<f32>) {
 }
 
 // Kaplanyan: one invocation per RSM texel; the reflected flux on the lit side, and for thin
-// translucent surfaces the transmitted part on the back side.
+// translucent surfaces the transmitted part on the back side; with occlusion, the texel is also
+// a blocker of the geometry volume.
 @compute @workgroup_size(8, 8, 1)
 fn inject_cs(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= lpv.rsm_size || id.y >= lpv.rsm_size {
@@ -195,27 +197,21 @@ fn inject_cs(@builtin(global_invocation_id) id: vec3<u32>) {
     if tr > 0.0 {
         inject_vpl(pos.xyz, -n, flux * tr);
     }
+    if lpv.occlusion == 1u {
+        inject_blocker(pos.xyz, n, pos.w);
+    }
 }
 
-// Blockers from the RSM: each texel is a surfel of area A⊥/|n·l| (capped at 4·A⊥).
-@compute @workgroup_size(8, 8, 1)
-fn inject_gv_cs(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= lpv.rsm_size || id.y >= lpv.rsm_size {
-        return;
-    }
-    let t = vec2<i32>(id.xy);
-    let pos = textureLoad(rsm_position, t, 0);
-    if pos.w <= 0.0 {
-        return;
-    }
-    let n = normalize(textureLoad(rsm_normal, t, 0).xyz);
+// A blocker of area A⊥/|n·l| (capped at 4·A⊥) in the geometry volume, whose cells are centred on
+// the light volume's cell corners.
+fn inject_blocker(p: vec3<f32>, n: vec3<f32>, area_perp: f32) {
     var to_light = -light.axis;
     if light.kind != 0u {
-        to_light = normalize(light.eye - pos.xyz);
+        to_light = normalize(light.eye - p);
     }
-    let area = pos.w / max(abs(dot(n, to_light)), 0.25);
+    let area = area_perp / max(abs(dot(n, to_light)), 0.25);
     let gn = i32(lpv.n) + 1;
-    let c = vec3<i32>(floor((pos.xyz - (lpv.origin - vec3<f32>(0.5 * lpv.cell))) / lpv.cell));
+    let c = vec3<i32>(floor((p - (lpv.origin - vec3<f32>(0.5 * lpv.cell))) / lpv.cell));
     if !inside(c, gn) {
         return;
     }
