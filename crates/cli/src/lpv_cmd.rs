@@ -27,7 +27,7 @@ pub struct LpvArgs {
     /// Cells per axis of the light propagation volume.
     #[arg(long, default_value_t = 32)]
     pub lpv_grid: u32,
-    /// Propagation steps (default: the grid size for `lpv`, 2 for `lpv-faithful`).
+    /// Propagation steps (default: 8 for `lpv`, 2 for `lpv-faithful`).
     #[arg(long)]
     pub lpv_iterations: Option<u32>,
     /// Reflective-shadow-map side in texels.
@@ -36,6 +36,18 @@ pub struct LpvArgs {
     /// `lpv`: propagate without the geometry volume (light leaks through walls).
     #[arg(long)]
     pub no_lpv_occlusion: bool,
+    /// `lpv`: damping against self-illumination, in cells (the lookup keeps the smaller of the
+    /// irradiance at the surface and this far out along the normal); 0 turns it off.
+    #[arg(long, default_value_t = 2.0)]
+    pub lpv_damping: f32,
+    /// `lpv`: nested volumes; the coarsest fits the scene, each finer one halves the cell and
+    /// follows the camera in whole cells.
+    #[arg(long, default_value_t = 1)]
+    pub lpv_cascades: u32,
+    /// `lpv`: let the cascades follow the camera continuously instead of in whole cells
+    /// (shows the flicker that snapping prevents).
+    #[arg(long)]
+    pub no_lpv_snap: bool,
     /// What to show: the final frame or the volume's indirect light only.
     #[arg(long, value_enum, default_value_t = DebugView::Final)]
     pub debug_view: DebugView,
@@ -48,6 +60,9 @@ impl Default for LpvArgs {
             lpv_iterations: None,
             rsm_size: 256,
             no_lpv_occlusion: false,
+            lpv_damping: 2.0,
+            lpv_cascades: 1,
+            no_lpv_snap: false,
             debug_view: DebugView::Final,
         }
     }
@@ -65,6 +80,9 @@ impl LpvArgs {
             iterations: self.lpv_iterations,
             rsm_size: self.rsm_size,
             occlusion: !self.no_lpv_occlusion,
+            damping: self.lpv_damping,
+            cascades: self.lpv_cascades,
+            snap: !self.no_lpv_snap,
             ..Default::default()
         };
         s.validate().map_err(|e| anyhow::anyhow!("{e}"))?;

@@ -229,6 +229,23 @@ impl Volume {
         }
         Vec3::from_array(e)
     }
+
+    /// [`Volume::irradiance`] with damping against self-illumination: per colour, the smaller of
+    /// the irradiance read half a cell along n and the one read `cells` further out.
+    ///
+    /// Kaplanyan & Dachsbacher damp a lookup by the intensity's directional derivative along the
+    /// normal; this is that test as a finite difference. Light arriving from elsewhere changes
+    /// slowly along n, while light the surface injected itself (and the 2-band lobes cannot keep
+    /// away from it once it has spread sideways) is strongest at the surface and falls off
+    /// within a few cells: where the irradiance grows towards the surface, the growth is
+    /// dropped. `cells` = 0 is the plain lookup.
+    pub fn irradiance_damped(&self, p: Vec3, n: Vec3, cells: f32) -> Vec3 {
+        let e = self.irradiance(p, n);
+        if cells <= 0.0 {
+            return e;
+        }
+        e.min(self.irradiance(p + cells * self.grid.cell * n, n))
+    }
 }
 
 /// Irradiance on normal `n` from one channel's intensity SH in a cell of size `s`:
@@ -238,6 +255,45 @@ pub fn irradiance_of(c: &Sh4, n: Vec3, s: f32) -> f32 {
     let y = basis(-n);
     let e = PI * c[0] * y[0] + 2.0 * PI / 3.0 * (c[1] * y[1] + c[2] * y[2] + c[3] * y[3]);
     (e / (s * s)).max(0.0)
+}
+
+/// Cascaded volumes (Kaplanyan & Dachsbacher 2010): `count` grids of `scene.n` cells, the last
+/// one `scene` itself (fitted around the scene, fixed), each finer one with half the cell size
+/// of the next, centred a quarter of its width ahead of `eye` along `forward` and, with `snap`,
+/// moved only in whole cells of its own size, so that a camera moving by less than a cell
+/// leaves every grid (and the image's indirect light) unchanged. Finest first.
+pub fn cascade_grids(scene: Grid, count: u32, eye: Vec3, forward: Vec3, snap: bool) -> Vec<Grid> {
+    let count = count.max(1);
+    let n = scene.n;
+    let mut grids = Vec::with_capacity(count as usize);
+    for c in 0..count - 1 {
+        let cell = scene.cell / (1u32 << (count - 1 - c)) as f32;
+        let centre = eye + forward.normalize_or_zero() * (0.25 * n as f32 * cell);
+        let corner = centre / cell - Vec3::splat(0.5 * n as f32);
+        let corner = if snap { corner.round() } else { corner };
+        grids.push(Grid {
+            n,
+            origin: corner * cell,
+            cell,
+        });
+    }
+    grids.push(scene);
+    grids
+}
+
+/// Where a lookup at `p` reads cascaded volumes: the finest grid holding `p` at least `border`
+/// cells inside, blended over the next `band` cells towards its edge with the next coarser
+/// one. Returns (cascade, weight of that cascade; the rest goes to cascade + 1). The last
+/// grid is used wherever no finer one holds `p`.
+pub fn cascade_weight(grids: &[Grid], p: Vec3, border: f32, band: f32) -> (usize, f32) {
+    for (c, g) in grids.iter().enumerate().take(grids.len().saturating_sub(1)) {
+        let f = (p - g.origin) / g.cell;
+        let d = f.min(Vec3::splat(g.n as f32) - f).min_element();
+        if d > border {
+            return (c, ((d - border) / band.max(1e-6)).min(1.0));
+        }
+    }
+    (grids.len().saturating_sub(1), 1.0)
 }
 
 /// Scatter VPLs into a volume (Kaplanyan): each adds Φ/π·cosine_lobe(n) to the cell holding
@@ -662,5 +718,90 @@ mod tests {
         let e = v.irradiance(Vec3::splat(1.0), Vec3::new(0.0, 0.6, 0.8));
         let want = std::f32::consts::PI * i / 0.25;
         assert!((e.x - want).abs() < 1e-3 * want, "{e} vs {want}");
+    }
+
+    #[test]
+    fn damping_removes_a_floors_own_light_and_keeps_light_from_above() {
+        // A lit floor (VPLs facing +y on y = 2) lights itself through the lobes that spread
+        // sideways; a source 8 cells above the floor is light from elsewhere.
+        let g = grid(16);
+        let mut floor = Vec::new();
+        for x in 0..16 {
+            for z in 0..16 {
+                floor.push(Vpl {
+                    position: Vec3::new(x as f32 + 0.5, 2.0, z as f32 + 0.5),
+                    normal: Vec3::Y,
+                    flux: Vec3::ONE,
+                });
+            }
+        }
+        let own = propagate(&inject(g, &floor), None, 8);
+        let p = Vec3::new(8.0, 2.0, 8.0);
+        let plain = own.irradiance(p, Vec3::Y).x;
+        let damped = own.irradiance_damped(p, Vec3::Y, 2.0).x;
+        assert!(plain > 0.0);
+        assert!(damped < 0.6 * plain, "{damped} vs {plain}");
+        let above = [Vpl {
+            position: Vec3::new(8.0, 10.0, 8.0),
+            normal: -Vec3::Y,
+            flux: Vec3::ONE,
+        }];
+        let other = propagate(&inject(g, &above), None, 8);
+        let plain = other.irradiance(p, Vec3::Y).x;
+        let damped = other.irradiance_damped(p, Vec3::Y, 2.0).x;
+        assert!(plain > 0.0);
+        assert!(damped > 0.9 * plain, "{damped} vs {plain}");
+        // No damping: the plain lookup.
+        assert_eq!(
+            other.irradiance_damped(p, Vec3::Y, 0.0),
+            other.irradiance(p, Vec3::Y)
+        );
+    }
+
+    #[test]
+    fn cascades_nest_and_do_not_move_for_sub_cell_camera_moves() {
+        let scene = Grid::around(Vec3::ZERO, Vec3::splat(10.0), 16, 1.0);
+        let eye = Vec3::new(3.3, 2.1, 4.7);
+        let fwd = Vec3::new(0.3, -0.2, 1.0);
+        let a = cascade_grids(scene, 3, eye, fwd, true);
+        assert_eq!(a.len(), 3);
+        assert_eq!(a[2], scene);
+        assert!((a[1].cell - scene.cell / 2.0).abs() < 1e-6);
+        assert!((a[0].cell - scene.cell / 4.0).abs() < 1e-6);
+        // Origins on whole cells of each grid.
+        for g in &a[..2] {
+            let k = g.origin / g.cell;
+            assert!((k - k.round()).abs().max_element() < 1e-3, "{k}");
+        }
+        // Moves of a fraction of the finest cell: every grid keeps its lattice (it stays or
+        // shifts by one whole cell where the move crosses a cell boundary).
+        for k in 1..10 {
+            let d = Vec3::new(0.37, -0.11, 0.23) * k as f32 * a[0].cell;
+            let b = cascade_grids(scene, 3, eye + d, fwd, true);
+            for (ga, gb) in a.iter().zip(&b) {
+                assert_eq!(ga.cell, gb.cell);
+                let shift = (gb.origin - ga.origin) / ga.cell;
+                assert!(
+                    (shift - shift.round()).abs().max_element() < 1e-3,
+                    "{shift}"
+                );
+                let moved = (d / ga.cell).abs().max_element();
+                assert!(shift.abs().max_element() <= moved.ceil() + 1e-3, "{shift}");
+            }
+        }
+        // Unsnapped, the fine grids follow the eye off the lattice.
+        let u0 = cascade_grids(scene, 3, eye, fwd, false);
+        let u = cascade_grids(scene, 3, eye + Vec3::X * 0.33 * a[0].cell, fwd, false);
+        let shift = (u[0].origin - u0[0].origin) / a[0].cell;
+        assert!((shift - shift.round()).abs().max_element() > 0.1, "{shift}");
+        // The eye's neighbourhood reads the finest grid; far away, the scene's.
+        let (c, w) = cascade_weight(
+            &a,
+            eye + fwd.normalize() * 0.25 * 16.0 * a[0].cell,
+            2.0,
+            2.0,
+        );
+        assert_eq!((c, w), (0, 1.0));
+        assert_eq!(cascade_weight(&a, Vec3::splat(-0.5), 2.0, 2.0).0, 2);
     }
 }

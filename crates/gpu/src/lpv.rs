@@ -53,8 +53,9 @@ pub struct LpvSettings {
     pub scheme: LpvScheme,
     /// Cells per axis.
     pub grid: u32,
-    /// Propagation steps; None = the grid size (Kaplanyan: light crosses the volume) or 2 (WPI,
-    /// as the report's Fig 6.1).
+    /// Propagation steps; None = 8 (Kaplanyan & Dachsbacher's figure for 32³: the 2-band
+    /// transport is diffusive and does not carry light much further, see docs/lpv.md; cascades
+    /// reach further) or 2 (WPI, as the report's Fig 6.1).
     pub iterations: Option<u32>,
     /// RSM side in texels.
     pub rsm_size: u32,
@@ -64,6 +65,18 @@ pub struct LpvSettings {
     pub wpi_samples: u32,
     /// Empty cells around the scene on each side.
     pub margin: f32,
+    /// Damping against self-illumination (Kaplanyan only): the lookup also reads this many
+    /// cells further along the normal and keeps the smaller irradiance; 0 = off
+    /// (`lightlab_core::lpv::Volume::irradiance_damped`).
+    pub damping: f32,
+    /// Nested volumes (Kaplanyan only): the coarsest fitted around the scene, each finer one
+    /// with half the cell size, following the camera (`lightlab_core::lpv::cascade_grids`).
+    pub cascades: u32,
+    /// Move the camera-following cascades in whole cells only (against flicker).
+    pub snap: bool,
+    /// Place the cascades for this eye position and view direction instead of the render
+    /// camera's (e.g. around a player, or to test a moved camera against a fixed view).
+    pub anchor: Option<(Vec3, Vec3)>,
 }
 
 impl Default for LpvSettings {
@@ -76,6 +89,10 @@ impl Default for LpvSettings {
             occlusion: true,
             wpi_samples: 16,
             margin: 1.0,
+            damping: 2.0,
+            cascades: 1,
+            snap: true,
+            anchor: None,
         }
     }
 }
@@ -83,7 +100,7 @@ impl Default for LpvSettings {
 impl LpvSettings {
     pub fn iterations(&self) -> u32 {
         self.iterations.unwrap_or(match self.scheme {
-            LpvScheme::Kaplanyan => self.grid,
+            LpvScheme::Kaplanyan => 8,
             LpvScheme::Wpi => 2,
         })
     }
@@ -107,18 +124,48 @@ impl LpvSettings {
         if !(1..=256).contains(&self.wpi_samples) {
             return Err("WPI samples per voxel must be within 1..=256".into());
         }
+        if !(self.damping.is_finite() && (0.0..=8.0).contains(&self.damping)) {
+            return Err(format!(
+                "LPV damping {} must be within 0..=8 cells",
+                self.damping
+            ));
+        }
+        if !(1..=4).contains(&self.cascades) {
+            return Err(format!(
+                "LPV cascades {} must be within 1..=4",
+                self.cascades
+            ));
+        }
+        if self.cascades > 1 && self.scheme == LpvScheme::Wpi {
+            return Err(
+                "lpv-faithful has a single volume (the report's); cascades need lpv".into(),
+            );
+        }
         if !(self.margin.is_finite() && (0.0..=self.grid as f32 / 4.0).contains(&self.margin)) {
             return Err("LPV margin must be within 0..=grid/4 cells".into());
         }
         Ok(())
     }
 
-    /// The volume's grid around the scene's bounds.
+    /// The volume's grid around the scene's bounds (the coarsest cascade).
     pub fn grid_for(&self, scene: &Scene) -> Grid {
         let (lo, hi) = scene
             .bounds()
             .unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
         Grid::around(lo, hi, self.grid, self.margin)
+    }
+
+    /// The cascades' grids, finest first, for a camera at `eye` looking along `forward`
+    /// (`anchor` overrides both).
+    pub fn grids_for(&self, scene: &Scene, eye: Vec3, forward: Vec3) -> Vec<Grid> {
+        let (eye, forward) = self.anchor.unwrap_or((eye, forward));
+        lightlab_core::lpv::cascade_grids(
+            self.grid_for(scene),
+            self.cascades,
+            eye,
+            forward,
+            self.snap,
+        )
     }
 }
 
@@ -137,6 +184,11 @@ pub struct LpvUniforms {
     pub store_last: u32,
     /// 1: the injection also fills the geometry volume.
     pub occlusion: u32,
+    /// First z texel of this cascade in the stacked 3D textures.
+    pub layer: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 /// WGSL `RsmLight`: one light of the reflective shadow maps.
@@ -286,10 +338,20 @@ struct Compute {
     store: wgpu::ComputePipeline,
 }
 
-/// The GPU resources of one light propagation volume.
+/// One cascade's atomics, ping-pong buffers and bind groups.
+struct Cascade {
+    /// Ping-pong bind groups: [0] reads A writes B, [1] reads B writes A.
+    groups: [wgpu::BindGroup; 2],
+    lpv_atomic: wgpu::Buffer,
+    gv_atomic: wgpu::Buffer,
+    buffers: [wgpu::Buffer; 2],
+}
+
+/// The GPU resources of a light propagation volume (one per cascade).
 pub struct Lpv {
     pub settings: LpvSettings,
-    pub grid: Grid,
+    /// The cascades' grids, finest first; the last is fitted around the scene.
+    pub grids: Vec<Grid>,
     lights: usize,
     rsm_pipeline: wgpu::RenderPipeline,
     rsm_group: wgpu::BindGroup,
@@ -297,12 +359,8 @@ pub struct Lpv {
     rsm_textures: Vec<wgpu::Texture>,
     rsm_depth: wgpu::TextureView,
     compute: Compute,
-    /// Ping-pong bind groups: [0] reads A writes B, [1] reads B writes A.
-    groups: [wgpu::BindGroup; 2],
-    lpv_atomic: wgpu::Buffer,
-    gv_atomic: wgpu::Buffer,
-    buffers: [wgpu::Buffer; 2],
-    /// The three 3D textures (r, g, b) the renderer samples.
+    cascades: Vec<Cascade>,
+    /// The three 3D textures (r, g, b) the renderer samples, the cascades stacked along z.
     pub textures: [wgpu::Texture; 3],
 }
 
@@ -310,10 +368,19 @@ pub struct Lpv {
 const CELL_BYTES: u64 = 48;
 
 impl Lpv {
-    pub fn new(ctx: &GpuContext, scene: &Scene, settings: LpvSettings) -> Result<Lpv, String> {
+    /// The volumes for a camera at `eye` looking along `forward` (where the cascades go).
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        settings: LpvSettings,
+        eye: Vec3,
+        forward: Vec3,
+    ) -> Result<Lpv, String> {
         settings.validate()?;
         let device = &ctx.device;
-        let grid = settings.grid_for(scene);
+        let grids = settings.grids_for(scene, eye, forward);
+        let grid = *grids.last().expect("at least one cascade");
+        let count = grids.len();
         let size = settings.rsm_size;
         let lights = rsm_lights(scene, &grid, size);
         let bound = lights.iter().map(|l| l.1).sum::<f32>().max(1e-12);
@@ -332,18 +399,28 @@ impl Lpv {
             wpi_samples: settings.wpi_samples,
             store_last: (settings.scheme == LpvScheme::Wpi) as u32,
             occlusion: 0,
+            ..Default::default()
         };
         let gv_on = settings.occlusion && settings.scheme == LpvScheme::Kaplanyan;
         let base = LpvUniforms {
             occlusion: gv_on as u32,
             ..base
         };
-        let mut uniform_bytes = vec![0u8; 2 * SLOT as usize];
-        for (k, use_gv) in [0u32, gv_on as u32].into_iter().enumerate() {
-            let u = LpvUniforms { use_gv, ..base };
-            let o = k * SLOT as usize;
-            uniform_bytes[o..o + std::mem::size_of::<LpvUniforms>()]
-                .copy_from_slice(bytemuck::bytes_of(&u));
+        // Two slots per cascade: without and with the geometry volume.
+        let mut uniform_bytes = vec![0u8; 2 * count * SLOT as usize];
+        for (c, g) in grids.iter().enumerate() {
+            for (k, use_gv) in [0u32, gv_on as u32].into_iter().enumerate() {
+                let u = LpvUniforms {
+                    origin: g.origin.to_array(),
+                    cell: g.cell,
+                    use_gv,
+                    layer: c as u32 * n,
+                    ..base
+                };
+                let o = (2 * c + k) * SLOT as usize;
+                uniform_bytes[o..o + std::mem::size_of::<LpvUniforms>()]
+                    .copy_from_slice(bytemuck::bytes_of(&u));
+            }
         }
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lpv uniforms"),
@@ -369,26 +446,13 @@ impl Lpv {
                 mapped_at_creation: false,
             })
         };
-        let lpv_atomic = storage(
-            "lpv atomics",
-            cells * CELL_BYTES,
-            wgpu::BufferUsages::empty(),
-        );
-        let gv_atomic = storage("gv atomics", gv_cells * 16, wgpu::BufferUsages::empty());
-        let read = wgpu::BufferUsages::COPY_SRC;
-        let buffers = [
-            storage("lpv a", cells * CELL_BYTES, read),
-            storage("lpv b", cells * CELL_BYTES, read),
-        ];
-        let accum = storage("lpv accumulation", cells * CELL_BYTES, read);
-        let gv = storage("geometry volume", gv_cells * 16, read);
         let textures = ["lpv r", "lpv g", "lpv b"].map(|label| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: wgpu::Extent3d {
                     width: n,
                     height: n,
-                    depth_or_array_layers: n,
+                    depth_or_array_layers: n * count as u32,
                 },
                 mip_level_count: 1,
                 sample_count: 1,
@@ -588,7 +652,14 @@ impl Lpv {
             .iter()
             .map(|t| t.create_view(&Default::default()))
             .collect();
-        let group = |src: &wgpu::Buffer, dst: &wgpu::Buffer| {
+        let read = wgpu::BufferUsages::COPY_SRC;
+        let none = wgpu::BufferUsages::empty();
+        let group = |src: &wgpu::Buffer,
+                     dst: &wgpu::Buffer,
+                     lpv_atomic: &wgpu::Buffer,
+                     gv_atomic: &wgpu::Buffer,
+                     accum: &wgpu::Buffer,
+                     gv: &wgpu::Buffer| {
             let e = |binding, resource| wgpu::BindGroupEntry { binding, resource };
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("lpv compute"),
@@ -611,13 +682,45 @@ impl Lpv {
                 ],
             })
         };
-        let groups = [
-            group(&buffers[0], &buffers[1]),
-            group(&buffers[1], &buffers[0]),
-        ];
+        let cascades = (0..count)
+            .map(|_| {
+                let lpv_atomic = storage("lpv atomics", cells * CELL_BYTES, none);
+                let gv_atomic = storage("gv atomics", gv_cells * 16, none);
+                let buffers = [
+                    storage("lpv a", cells * CELL_BYTES, read),
+                    storage("lpv b", cells * CELL_BYTES, read),
+                ];
+                let accum = storage("lpv accumulation", cells * CELL_BYTES, read);
+                let gv = storage("geometry volume", gv_cells * 16, read);
+                let groups = [
+                    group(
+                        &buffers[0],
+                        &buffers[1],
+                        &lpv_atomic,
+                        &gv_atomic,
+                        &accum,
+                        &gv,
+                    ),
+                    group(
+                        &buffers[1],
+                        &buffers[0],
+                        &lpv_atomic,
+                        &gv_atomic,
+                        &accum,
+                        &gv,
+                    ),
+                ];
+                Cascade {
+                    groups,
+                    lpv_atomic,
+                    gv_atomic,
+                    buffers,
+                }
+            })
+            .collect();
         Ok(Lpv {
             settings,
-            grid,
+            grids,
             lights: lights.len(),
             rsm_pipeline,
             rsm_group,
@@ -625,10 +728,7 @@ impl Lpv {
             rsm_textures,
             rsm_depth,
             compute,
-            groups,
-            lpv_atomic,
-            gv_atomic,
-            buffers,
+            cascades,
             textures,
         })
     }
@@ -650,17 +750,21 @@ impl Lpv {
         scene: &GpuScene,
         ts: &mut dyn FnMut(&'static str) -> Option<(&'q wgpu::QuerySet, u32, u32)>,
     ) {
-        let n = self.grid.n;
+        let n = self.grids[0].n;
         let wg3 = n.div_ceil(4);
         let wg_gv = (n + 1).div_ceil(4);
         let wg_rsm = self.settings.rsm_size.div_ceil(8);
         let wpi = self.settings.scheme == LpvScheme::Wpi;
-        enc.clear_buffer(&self.lpv_atomic, 0, None);
-        enc.clear_buffer(&self.gv_atomic, 0, None);
-        if wpi {
-            // The gather injection adds into buffer A, light by light.
-            enc.clear_buffer(&self.buffers[0], 0, None);
+        for c in &self.cascades {
+            enc.clear_buffer(&c.lpv_atomic, 0, None);
+            enc.clear_buffer(&c.gv_atomic, 0, None);
+            if wpi {
+                // The gather injection adds into buffer A, light by light.
+                enc.clear_buffer(&c.buffers[0], 0, None);
+            }
         }
+        // Cascade c's uniforms: slot 2c without, 2c + 1 with the geometry volume.
+        let slot = |c: usize, gv: bool| ((2 * c + gv as usize) as u64 * SLOT) as u32;
         let compute_ts = |t: Option<(&'q wgpu::QuerySet, u32, u32)>| {
             t.map(|(query_set, b, e)| wgpu::ComputePassTimestampWrites {
                 query_set,
@@ -724,14 +828,16 @@ impl Lpv {
                 label: Some("lpv inject"),
                 timestamp_writes: compute_ts(t),
             });
-            pass.set_bind_group(0, &self.groups[1], &[0, light_offset]);
-            if wpi {
-                // Group 1 writes buffer A.
-                pass.set_pipeline(&self.compute.inject_wpi);
-                pass.dispatch_workgroups(wg3, wg3, wg3);
-            } else {
-                pass.set_pipeline(&self.compute.inject);
-                pass.dispatch_workgroups(wg_rsm, wg_rsm, 1);
+            for (ci, c) in self.cascades.iter().enumerate() {
+                pass.set_bind_group(0, &c.groups[1], &[slot(ci, false), light_offset]);
+                if wpi {
+                    // Group 1 writes buffer A.
+                    pass.set_pipeline(&self.compute.inject_wpi);
+                    pass.dispatch_workgroups(wg3, wg3, wg3);
+                } else {
+                    pass.set_pipeline(&self.compute.inject);
+                    pass.dispatch_workgroups(wg_rsm, wg_rsm, 1);
+                }
             }
         }
         let t = ts("lpv propagate");
@@ -739,35 +845,47 @@ impl Lpv {
             label: Some("lpv propagate"),
             timestamp_writes: compute_ts(t),
         });
-        // The seed lands in buffer A (group 1's destination) and the accumulation.
-        let mut current = 0; // the group whose source holds the latest light
-        if !wpi {
-            pass.set_pipeline(&self.compute.resolve);
-            pass.set_bind_group(0, &self.groups[1], &[0, 0]);
-            pass.dispatch_workgroups(wg_gv, wg_gv, wg_gv);
-        }
-        for i in 0..self.settings.iterations() {
-            let uniform = if i == 0 { 0 } else { SLOT as u32 };
-            pass.set_pipeline(if wpi {
-                &self.compute.propagate_wpi
-            } else {
-                &self.compute.propagate
-            });
-            pass.set_bind_group(0, &self.groups[current], &[uniform, 0]);
+        for (ci, c) in self.cascades.iter().enumerate() {
+            // The seed lands in buffer A (group 1's destination) and the accumulation.
+            let mut current = 0; // the group whose source holds the latest light
+            if !wpi {
+                pass.set_pipeline(&self.compute.resolve);
+                pass.set_bind_group(0, &c.groups[1], &[slot(ci, false), 0]);
+                pass.dispatch_workgroups(wg_gv, wg_gv, wg_gv);
+            }
+            for i in 0..self.settings.iterations() {
+                // No occlusion on the first step (against self-shadowing).
+                pass.set_pipeline(if wpi {
+                    &self.compute.propagate_wpi
+                } else {
+                    &self.compute.propagate
+                });
+                pass.set_bind_group(0, &c.groups[current], &[slot(ci, i > 0), 0]);
+                pass.dispatch_workgroups(wg3, wg3, wg3);
+                current = 1 - current;
+            }
+            pass.set_pipeline(&self.compute.store);
+            pass.set_bind_group(0, &c.groups[current], &[slot(ci, false), 0]);
             pass.dispatch_workgroups(wg3, wg3, wg3);
-            current = 1 - current;
         }
-        pass.set_pipeline(&self.compute.store);
-        pass.set_bind_group(0, &self.groups[current], &[0, 0]);
-        pass.dispatch_workgroups(wg3, wg3, wg3);
     }
 
-    /// Read the stored volume back (cells in x-fastest order, r/g/b SH per cell).
-    pub fn read_volume(&self, ctx: &GpuContext) -> Result<lightlab_core::lpv::Volume, String> {
-        let mut vol = lightlab_core::lpv::Volume::new(self.grid);
+    /// Read cascade `cascade`'s stored volume back (cells in x-fastest order, r/g/b SH per
+    /// cell).
+    pub fn read_volume(
+        &self,
+        ctx: &GpuContext,
+        cascade: usize,
+    ) -> Result<lightlab_core::lpv::Volume, String> {
+        let grid = *self
+            .grids
+            .get(cascade)
+            .ok_or_else(|| format!("no cascade {cascade}"))?;
+        let mut vol = lightlab_core::lpv::Volume::new(grid);
+        let first = grid.len() * cascade;
         for (ch, tex) in self.textures.iter().enumerate() {
             let data = crate::raster::read_texture(ctx, tex, 8).map_err(|e| e.to_string())?;
-            let halves: &[u16] = bytemuck::cast_slice(&data);
+            let halves: &[u16] = &bytemuck::cast_slice(&data)[first * 4..];
             for (i, cell) in vol.cells.iter_mut().enumerate() {
                 for k in 0..4 {
                     cell[ch][k] = half::f16::from_bits(halves[i * 4 + k]).to_f32();
@@ -801,7 +919,11 @@ mod tests {
                 rsm_size,
                 wpi_samples,
                 store_last,
-                occlusion
+                occlusion,
+                layer,
+                pad0,
+                pad1,
+                pad2
             ),
         )
         .unwrap();

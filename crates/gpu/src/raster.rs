@@ -772,7 +772,10 @@ impl Renderer {
         });
         let gscene = GpuScene::with_lightmap_uvs(device, &ctx.queue, scene, lm_rects.as_deref());
         let lpv_res = lpv
-            .map(|(l, _)| crate::lpv::Lpv::new(ctx, scene, l.clone()))
+            .map(|(l, _)| {
+                let forward = camera.transform.transform_vector3(-Vec3::Z);
+                crate::lpv::Lpv::new(ctx, scene, l.clone(), camera.position(), forward)
+            })
             .transpose()
             .map_err(RasterError::Settings)?;
         let aspect = s.width as f32 / s.height as f32;
@@ -893,17 +896,27 @@ impl Renderer {
                 (sh.groups(scene.instances.len()) * sh.points) as u32
             }),
             sh_groups: sh.map_or(0, |sh| sh.groups(scene.instances.len()) as u32),
-            lpv_origin: lpv_res
-                .as_ref()
-                .map_or([0.0; 3], |l| l.grid.origin.to_array()),
-            lpv_cell: lpv_res.as_ref().map_or(1.0, |l| l.grid.cell),
             lpv_mode: lpv_res.as_ref().map_or(0, |l| match l.settings.scheme {
                 crate::lpv::LpvScheme::Kaplanyan => 1,
                 crate::lpv::LpvScheme::Wpi => 2,
             }),
-            lpv_size: lpv_res.as_ref().map_or(1.0, |l| l.grid.n as f32),
+            lpv_size: lpv_res.as_ref().map_or(1.0, |l| l.grids[0].n as f32),
             lpv_indirect_only: lpv.is_some_and(|l| l.1) as u32,
-            lpv_pad: 0,
+            lpv_cascades: lpv_res.as_ref().map_or(1, |l| l.grids.len() as u32),
+            lpv_pad0: 0,
+            lpv_pad1: 0,
+            lpv_pad2: 0,
+            lpv_grids: {
+                let mut g = [[0.0, 0.0, 0.0, 1.0]; 4];
+                for (k, grid) in lpv_res.iter().flat_map(|l| &l.grids).enumerate() {
+                    g[k] = grid.origin.extend(grid.cell).to_array();
+                }
+                g
+            },
+            lpv_damping: lpv_res.as_ref().map_or(0.0, |l| match l.settings.scheme {
+                crate::lpv::LpvScheme::Kaplanyan => l.settings.damping,
+                crate::lpv::LpvScheme::Wpi => 0.0,
+            }),
         };
         let frame_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame"),

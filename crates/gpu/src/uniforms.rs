@@ -41,14 +41,18 @@ pub struct FrameUniforms {
     pub sh_reps: u32,
     pub sh_coeff_base: u32,
     pub sh_groups: u32,
-    /// Light propagation volume: grid origin, cell size, 0 off / 1 Kaplanyan / 2 WPI, cells
-    /// per axis, 1 = indirect light only (debug view).
-    pub lpv_origin: [f32; 3],
-    pub lpv_cell: f32,
+    /// Light propagation volume: 0 off / 1 Kaplanyan / 2 WPI, cells per axis, 1 = indirect
+    /// light only (debug view), damping distance in cells, number of cascades, and per
+    /// cascade (finest first) the grid's origin and cell size.
     pub lpv_mode: u32,
     pub lpv_size: f32,
     pub lpv_indirect_only: u32,
-    pub lpv_pad: u32,
+    pub lpv_damping: f32,
+    pub lpv_cascades: u32,
+    pub lpv_pad0: u32,
+    pub lpv_pad1: u32,
+    pub lpv_pad2: u32,
+    pub lpv_grids: [[f32; 4]; 4],
 }
 
 /// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional.
@@ -154,12 +158,15 @@ mod tests {
                     sh_reps,
                     sh_coeff_base,
                     sh_groups,
-                    lpv_origin,
-                    lpv_cell,
                     lpv_mode,
                     lpv_size,
                     lpv_indirect_only,
-                    lpv_pad
+                    lpv_damping,
+                    lpv_cascades,
+                    lpv_pad0,
+                    lpv_pad1,
+                    lpv_pad2,
+                    lpv_grids
                 ),
             ),
             (

@@ -46,11 +46,17 @@ fn read_rsm(ctx: &GpuContext, r: &Renderer) -> Vec<([f32; 4], [f32; 4], [f32; 4]
         .collect()
 }
 
-/// The CPU pipeline on the GPU's RSM: VPLs (reflected and transmitted), blockers, propagation.
-fn cpu_volume(scene: &Scene, r: &Renderer, texels: &[([f32; 4], [f32; 4], [f32; 4])]) -> Volume {
+/// The CPU pipeline on the GPU's RSM: VPLs (reflected and transmitted), blockers, propagation,
+/// on cascade `cascade`'s grid.
+fn cpu_volume(
+    scene: &Scene,
+    r: &Renderer,
+    texels: &[([f32; 4], [f32; 4], [f32; 4])],
+    cascade: usize,
+) -> Volume {
     let l = r.lpv().unwrap();
-    let grid = l.grid;
-    let light = rsm_lights(scene, &grid, l.settings.rsm_size)[0].0;
+    let grid = l.grids[cascade];
+    let light = rsm_lights(scene, l.grids.last().unwrap(), l.settings.rsm_size)[0].0;
     let eye = Vec3::from_array(light.eye);
     let mut vpls = Vec::new();
     let mut surfels = Vec::new();
@@ -108,28 +114,40 @@ fn rel_l2(a: &Volume, b: &Volume) -> f64 {
 }
 
 #[test]
-fn gpu_volume_matches_the_cpu_reference_on_cornell() {
+fn gpu_volume_matches_the_cpu_reference_on_cornell_and_room_cascades() {
     let Some(ctx) = test_context() else { return };
-    let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
-    for occlusion in [false, true] {
+    // Cornell with and without the geometry volume; the room's sun with three cascades.
+    for (name, occlusion, cascades) in [
+        ("cornell", false, 1),
+        ("cornell", true, 1),
+        ("room", true, 3),
+    ] {
+        let scene = lightlab_scene::builtin::builtin(name).unwrap();
         let s = LpvSettings {
             grid: 16,
             rsm_size: 128,
             iterations: Some(8),
             occlusion,
+            cascades,
             ..Default::default()
         };
         let r = render_lpv(&ctx, &scene, &s);
         let texels = read_rsm(&ctx, &r);
         let lit = texels.iter().filter(|t| t.2[3] > 0.0).count();
-        assert!(lit > texels.len() / 2, "the RSM sees the box: {lit}");
-        let cpu = cpu_volume(&scene, &r, &texels);
-        let gpu = r.lpv().unwrap().read_volume(&ctx).unwrap();
-        let e = rel_l2(&gpu, &cpu);
-        let (fg, fc) = (gpu.total_flux(), cpu.total_flux());
-        eprintln!("occlusion {occlusion}: relative L2 {e:.2e}, flux GPU {fg} CPU {fc}");
-        assert!(e < 5e-3, "GPU vs CPU volume: {e}");
-        assert!(((fg - fc) / fc).abs().max_element() < 2e-3);
+        assert!(lit > texels.len() / 16, "the RSM sees the scene: {lit}");
+        for c in 0..cascades as usize {
+            let cpu = cpu_volume(&scene, &r, &texels, c);
+            let gpu = r.lpv().unwrap().read_volume(&ctx, c).unwrap();
+            let e = rel_l2(&gpu, &cpu);
+            let (fg, fc) = (gpu.total_flux(), cpu.total_flux());
+            eprintln!(
+                "{name}, occlusion {occlusion}, cascade {c}/{cascades}: relative L2 {e:.2e}, \
+                 flux GPU {fg} CPU {fc}"
+            );
+            assert!(fc.x > 0.0, "cascade {c} holds light");
+            assert!(e < 5e-3, "GPU vs CPU volume: {e}");
+            assert!(((fg - fc) / fc).abs().max_element() < 2e-3);
+        }
     }
 }
 
@@ -149,7 +167,7 @@ fn wpi_propagation_on_the_gpu_grows_like_the_report() {
             ..Default::default()
         };
         let r = render_lpv(&ctx, &scene, &s);
-        let v = r.lpv().unwrap().read_volume(&ctx).unwrap();
+        let v = r.lpv().unwrap().read_volume(&ctx, 0).unwrap();
         // The CPU kernel applied to the GPU's seed.
         if k == 0 {
             let mut cpu = v.clone();
@@ -208,12 +226,18 @@ fn fit_constant(a: &lightlab_core::image::Image, r: &lightlab_core::image::Image
 fn lpv_indirect_light_on_cornell_against_one_bounce_of_the_reference() {
     // Issue 7's measurement: indirect light only, against a path-traced reference of exactly one
     // bounce, beside the best constant ambient term and lpv-faithful. The issue's target (lpv at
-    // most half the ambient's relMSE) is NOT met yet (docs/lpv.md: lpv 3.17, ambient 0.41 on this
-    // normalised scale); this test pins what holds: lpv beats the report's scheme, and does not
+    // most half the ambient's relMSE) is NOT met (docs/lpv.md: the 2-band transport is
+    // diffusive; defaults 0.58, 8³ with 4 steps 0.25, ambient 0.41 on this normalised scale);
+    // this test pins what holds: damping helps, lpv beats the report's scheme, and does not
     // regress.
     let Some(ctx) = test_context() else { return };
     let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
     let reference = reference_one_bounce(&scene);
+    let render_with = |s: &LpvSettings| {
+        let mut r = render_lpv(&ctx, &scene, s);
+        r.render(&ctx);
+        r.read_hdr(&ctx).unwrap()
+    };
     let render = |scheme| {
         let s = LpvSettings {
             scheme,
@@ -273,7 +297,97 @@ fn lpv_indirect_light_on_cornell_against_one_bounce_of_the_reference() {
     eprintln!(
         "cornell, one indirect bounce, 64²: relMSE lpv {lpv:.4}, lpv-faithful {wpi:.4}, fitted ambient {amb:.4} (c = {c})"
     );
+    // Variants: no damping, the coarse grid that suits this closed box, cascades.
+    let variant = |s: LpvSettings| {
+        lightlab_core::metrics::relmse(&scaled(&render_with(&s)), &reference).unwrap()
+    };
+    let d = LpvSettings::default();
+    let undamped = variant(LpvSettings {
+        damping: 0.0,
+        ..d.clone()
+    });
+    let coarse = variant(LpvSettings {
+        grid: 8,
+        iterations: Some(4),
+        ..d.clone()
+    });
+    let cascaded = variant(LpvSettings {
+        cascades: 3,
+        ..d.clone()
+    });
+    eprintln!(
+        "  lpv without damping {undamped:.4}, 8³ and 4 steps {coarse:.4}, 32³ × 3 cascades \
+         {cascaded:.4}"
+    );
     assert!(lpv < 0.5 * wpi, "lpv {lpv} vs lpv-faithful {wpi}");
-    assert!(lpv < 3.5, "lpv regressed: {lpv} (was 3.17)");
+    assert!(lpv < 0.8 * undamped, "damping helps: {lpv} vs {undamped}");
+    assert!(lpv < 0.7, "lpv regressed: {lpv} (was 0.58)");
+    assert!(coarse < 0.3, "8³ regressed: {coarse} (was 0.25)");
     assert!(amb < 0.5, "the fitted ambient baseline: {amb}");
+}
+
+#[test]
+fn moving_the_camera_by_a_fraction_of_a_cell_does_not_flicker() {
+    // Issue 7: the cascades follow the camera in whole cells, so a camera moved by a fraction
+    // of the finest cell leaves the indirect light of a fixed view unchanged (< 1 %); unsnapped
+    // cascades change it. Room (camera inside), 16³ × 3 cascades, the indirect light only.
+    let Some(ctx) = test_context() else { return };
+    let scene = lightlab_scene::builtin::builtin("room").unwrap();
+    let cam = scene.default_camera().unwrap().clone();
+    let forward = cam.transform.transform_vector3(-Vec3::Z);
+    let base = LpvSettings {
+        grid: 16,
+        rsm_size: 128,
+        iterations: Some(8),
+        cascades: 3,
+        ..Default::default()
+    };
+    // The cascades placed as for an eye whose finest cascade is centred on the pillars and the
+    // lit floor the view looks at (the room camera itself sees little within its finest one).
+    let finest = base.grid_for(&scene).cell / 4.0;
+    let eye = Vec3::new(0.9, 0.6, 0.0) - forward * (0.25 * 16.0 * finest);
+    let render = |s: &LpvSettings| {
+        let mut r = render_lpv(&ctx, &scene, s);
+        r.render(&ctx);
+        r.read_hdr(&ctx).unwrap()
+    };
+    let change = |a: &lightlab_core::image::Image, b: &lightlab_core::image::Image| {
+        let (mut d, mut t) = (0.0f64, 0.0f64);
+        for (x, y) in a.data.iter().zip(&b.data) {
+            d += (*x - *y).abs().element_sum() as f64;
+            t += x.element_sum() as f64;
+        }
+        d / t.max(1e-30)
+    };
+    let dir = Vec3::new(1.0, 0.3, -0.6).normalize();
+    let mut worst = [0.0f64; 2];
+    let mut crossed = false;
+    for (k, snap) in [true, false].into_iter().enumerate() {
+        let at = |f: f32| LpvSettings {
+            snap,
+            anchor: Some((eye + dir * f * finest, forward)),
+            ..base.clone()
+        };
+        let still = render(&at(0.0));
+        let grids0 = at(0.0).grids_for(&scene, eye, forward);
+        for f in [0.3, 0.55, 0.8, 0.95] {
+            let s = at(f);
+            let c = change(&still, &render(&s));
+            let moved = s.grids_for(&scene, eye, forward) != grids0;
+            eprintln!(
+                "snap {snap}: camera moved {f} of a cell (grids moved: {moved}): indirect \
+                 image changes {c:.2e}"
+            );
+            crossed |= snap && moved;
+            worst[k] = worst[k].max(c);
+        }
+    }
+    // At least one move crossed a cell boundary, where the snapped grids shift by a whole cell.
+    assert!(crossed);
+    assert!(worst[0] < 0.01, "snapped cascades flicker: {}", worst[0]);
+    assert!(
+        worst[1] > 0.01,
+        "unsnapped cascades should change: {}",
+        worst[1]
+    );
 }

@@ -45,14 +45,18 @@ struct FrameUniforms {
     sh_coeff_base: u32,
     // Number of groups.
     sh_groups: u32,
-    // Light propagation volume (lpv.wgsl): grid origin and cell size, 0 off / 1 Kaplanyan
-    // (irradiance) / 2 WPI (point evaluation at −n), cells per axis, 1 = indirect light only.
-    lpv_origin: vec3<f32>,
-    lpv_cell: f32,
+    // Light propagation volume (lpv.wgsl): 0 off / 1 Kaplanyan (irradiance) / 2 WPI (point
+    // evaluation at −n), cells per axis, 1 = indirect light only, damping [cells], cascades.
     lpv_mode: u32,
     lpv_size: f32,
     lpv_indirect_only: u32,
-    lpv_pad: u32,
+    lpv_damping: f32,
+    lpv_cascades: u32,
+    lpv_pad0: u32,
+    lpv_pad1: u32,
+    lpv_pad2: u32,
+    // Per cascade, finest first: origin (xyz) and cell size (w).
+    lpv_grids: array<vec4<f32>, 4>,
 }
 
 // One light. kind: 0 point, 1 spot, 2 directional. Spot cones as cosines.

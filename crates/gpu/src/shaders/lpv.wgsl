@@ -32,6 +32,11 @@ struct LpvUniforms {
     store_last: u32,
     // 1: the injection also fills the geometry volume.
     occlusion: u32,
+    // First z texel of this cascade in the stacked 3D textures.
+    layer: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // One light of the reflective shadow maps.
@@ -438,7 +443,7 @@ fn store_cs(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = cell_index(vec3<i32>(id), i32(lpv.n)) * 3;
-    let c = vec3<i32>(id);
+    let c = vec3<i32>(id) + vec3<i32>(0, 0, i32(lpv.layer));
     if lpv.store_last == 1u {
         textureStore(out_r, c, src[i]);
         textureStore(out_g, c, src[i + 1]);

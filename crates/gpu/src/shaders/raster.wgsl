@@ -319,26 +319,79 @@ fn directional_weights(n: vec3<f32>) -> vec3<f32> {
 
 // ---- light propagation volumes -----------------------------------------------------------------
 
-// Indirect irradiance E from the LPV at a surface (lightlab_core::lpv::Volume::irradiance).
-// Kaplanyan: read half a cell along n, incident radiance I(−ω)/s², cosine-convolved.
-// WPI (lpv-faithful): the SH evaluated at −n just off the surface, as the report's compositor.
-fn lpv_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    let s = frame.lpv_cell;
-    var q = p + 0.5 * s * n;
-    if frame.lpv_mode == 2u {
-        q = p + 0.001 * s * frame.lpv_size * n;
-    }
-    let uvw = (q - frame.lpv_origin) / (s * frame.lpv_size);
-    let r = textureSampleLevel(lpv_r, lpv_sampler, uvw, 0.0);
-    let g = textureSampleLevel(lpv_g, lpv_sampler, uvw, 0.0);
-    let b = textureSampleLevel(lpv_b, lpv_sampler, uvw, 0.0);
+// The LPV's three colour SH read trilinearly at q in cascade c (the cascades are stacked along
+// z; reads clamp to the cascade's cell centres, as lightlab_core::lpv::Volume::sample).
+struct LpvSample {
+    r: vec4<f32>,
+    g: vec4<f32>,
+    b: vec4<f32>,
+}
+
+fn lpv_sample(q: vec3<f32>, c: u32) -> LpvSample {
+    let g = frame.lpv_grids[c];
+    let n = frame.lpv_size;
+    let f = clamp((q - g.xyz) / g.w, vec3<f32>(0.5), vec3<f32>(n - 0.5));
+    let uvw = (f + vec3<f32>(0.0, 0.0, f32(c) * n)) / vec3<f32>(n, n, n * f32(frame.lpv_cascades));
+    return LpvSample(
+        textureSampleLevel(lpv_r, lpv_sampler, uvw, 0.0),
+        textureSampleLevel(lpv_g, lpv_sampler, uvw, 0.0),
+        textureSampleLevel(lpv_b, lpv_sampler, uvw, 0.0),
+    );
+}
+
+// Kaplanyan's irradiance on normal n from cascade c read at q (lightlab_core::lpv::irradiance_of).
+fn lpv_read(q: vec3<f32>, n: vec3<f32>, c: u32) -> vec3<f32> {
+    let s = frame.lpv_grids[c].w;
+    let v = lpv_sample(q, c);
     let m = -n;
     let y = vec4<f32>(0.2820948, 0.4886025 * m.y, 0.4886025 * m.z, 0.4886025 * m.x);
-    if frame.lpv_mode == 2u {
-        return max(vec3<f32>(dot(r, y), dot(g, y), dot(b, y)), vec3<f32>(0.0));
-    }
     let k = vec4<f32>(PI, 2.0 * PI / 3.0, 2.0 * PI / 3.0, 2.0 * PI / 3.0) * y / (s * s);
-    return max(vec3<f32>(dot(r, k), dot(g, k), dot(b, k)), vec3<f32>(0.0));
+    return max(vec3<f32>(dot(v.r, k), dot(v.g, k), dot(v.b, k)), vec3<f32>(0.0));
+}
+
+// Cascade c's damped irradiance (lightlab_core::lpv::Volume::irradiance_damped): read half a
+// cell along n and, with damping, keep the smaller of that and the read lpv_damping cells out.
+fn lpv_cascade_irradiance(p: vec3<f32>, n: vec3<f32>, c: u32) -> vec3<f32> {
+    let s = frame.lpv_grids[c].w;
+    let q = p + 0.5 * s * n;
+    let e = lpv_read(q, n, c);
+    if frame.lpv_damping > 0.0 {
+        return min(e, lpv_read(q + frame.lpv_damping * s * n, n, c));
+    }
+    return e;
+}
+
+// Indirect irradiance E from the LPV at a surface. Kaplanyan: the finest cascade holding p
+// (2 + damping) cells inside, blended over 2 cells towards its edge with the next coarser
+// (lightlab_core::lpv::cascade_weight). WPI (lpv-faithful): the SH evaluated at −n just off
+// the surface, as the report's compositor.
+fn lpv_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    if frame.lpv_mode == 2u {
+        let q = p + 0.001 * frame.lpv_grids[0].w * frame.lpv_size * n;
+        let v = lpv_sample(q, 0u);
+        let m = -n;
+        let y = vec4<f32>(0.2820948, 0.4886025 * m.y, 0.4886025 * m.z, 0.4886025 * m.x);
+        return max(vec3<f32>(dot(v.r, y), dot(v.g, y), dot(v.b, y)), vec3<f32>(0.0));
+    }
+    let last = frame.lpv_cascades - 1u;
+    let border = 2.0 + frame.lpv_damping;
+    var c = last;
+    var w = 1.0;
+    for (var k = 0u; k < last; k++) {
+        let g = frame.lpv_grids[k];
+        let f = (p - g.xyz) / g.w;
+        let d = min(min(f.x, min(f.y, f.z)), frame.lpv_size - max(f.x, max(f.y, f.z)));
+        if d > border {
+            c = k;
+            w = min((d - border) / 2.0, 1.0);
+            break;
+        }
+    }
+    let e = lpv_cascade_irradiance(p, n, c);
+    if w < 1.0 {
+        return w * e + (1.0 - w) * lpv_cascade_irradiance(p, n, c + 1u);
+    }
+    return e;
 }
 
 // Everything but the per-light passes: ambient and emission (only the LPV's indirect light in
