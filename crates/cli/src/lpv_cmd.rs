@@ -13,12 +13,40 @@ use lightlab_scene::Scene;
 
 pub const LPV_TECHNIQUES: [&str; 2] = ["lpv", "lpv-faithful"];
 
+/// What `--debug-view` shows. Layers are written as linear values (the G-buffer's and the
+/// RSM's at their own resolution); `--tonemap clamp` shows normals and albedo as stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum DebugView {
     /// The full frame.
     Final,
     /// Only the volume's indirect light (diffuse albedo/π × its irradiance).
     Indirect,
+    /// G-buffer: diffuse reflectance.
+    Albedo,
+    /// G-buffer: shading normal, n/2 + ½.
+    Normal,
+    /// G-buffer: specular F0 (r), roughness (g), diffuse transmission (b).
+    Material,
+    /// G-buffer: distance from the camera over the largest distance seen.
+    Depth,
+    /// RSM of the last light: reflected (and transmitted) flux per texel over the largest.
+    RsmFlux,
+    /// RSM: surface normal towards the light, n/2 + ½.
+    RsmNormal,
+    /// RSM: world position, mapped to the volume's box ([0, 1]³).
+    RsmPosition,
+    /// The scene's (coarsest) volume's z-slices side by side (row-major from z = 0): mean
+    /// radiance of each cell, I₀/s² [W/(m²·sr)].
+    LpvSlices,
+}
+
+impl DebugView {
+    fn gbuffer(self) -> bool {
+        matches!(
+            self,
+            DebugView::Albedo | DebugView::Normal | DebugView::Material | DebugView::Depth
+        )
+    }
 }
 
 /// Options of the LPV techniques.
@@ -102,7 +130,12 @@ pub fn lpv_renderer(
     height: u32,
     camera: usize,
 ) -> Result<Renderer> {
-    let settings = crate::raster_cmd::settings("phong-shadow-maps", raster, width, height, camera)?;
+    let mut settings =
+        crate::raster_cmd::settings("phong-shadow-maps", raster, width, height, camera)?;
+    if lpv.debug_view.gbuffer() {
+        // Only the deferred path writes the G-buffer.
+        settings.path = lightlab_gpu::raster::RenderPath::Deferred;
+    }
     let s = lpv.settings(technique)?;
     Ok(Renderer::with_lpv(
         ctx,
@@ -126,5 +159,113 @@ pub fn render_lpv(
     camera: usize,
 ) -> Result<(Image, FrameTimes)> {
     let mut r = lpv_renderer(ctx, scene, technique, raster, lpv, width, height, camera)?;
-    crate::raster_cmd::timed_frame(ctx, &mut r, raster.ssaa)
+    let (img, times) = crate::raster_cmd::timed_frame(ctx, &mut r, raster.ssaa)?;
+    Ok((
+        debug_image(ctx, &r, lpv.debug_view, raster.ssaa)?.unwrap_or(img),
+        times,
+    ))
+}
+
+/// The layer a debug view shows, or None for the frame itself.
+fn debug_image(
+    ctx: &GpuContext,
+    r: &Renderer,
+    view: DebugView,
+    ssaa: u32,
+) -> Result<Option<Image>> {
+    use glam::Vec3;
+    let v3 = |c: &[f32; 4]| Vec3::new(c[0], c[1], c[2]);
+    let layer = |w: u32, h: u32, texels: &[[f32; 4]], f: &dyn Fn(&[f32; 4]) -> Vec3| {
+        let mut img = Image::new(w, h);
+        for (px, t) in img.data.iter_mut().zip(texels) {
+            *px = f(t);
+        }
+        img
+    };
+    let lpv = r.lpv().expect("an LPV renderer");
+    if view.gbuffer() {
+        let g = r.read_gbuffer(ctx)?;
+        let (w, h) = (r.settings.width, r.settings.height);
+        let img = match view {
+            DebugView::Albedo => layer(w, h, &g[0], &v3),
+            DebugView::Normal => layer(w, h, &g[1], &|c| 0.5 * v3(c) + Vec3::splat(0.5)),
+            DebugView::Material => {
+                // F0 (r), roughness (the normal layer's w), transmission (fraction of w).
+                let m: Vec<[f32; 4]> = g[2]
+                    .iter()
+                    .zip(&g[1])
+                    .map(|(m, n)| [m[0], n[3], m[3].fract(), 0.0])
+                    .collect();
+                layer(w, h, &m, &v3)
+            }
+            _ => normalised(layer(w, h, &g[3], &|c| {
+                Vec3::splat(if c[3] > 0.0 { v3(c).length() } else { 0.0 })
+            })),
+        };
+        return Ok(Some(img.downsample(ssaa)));
+    }
+    let size = lpv.settings.rsm_size;
+    let scene_grid = *lpv.grids.last().expect("a volume");
+    let rsm = || lpv.read_rsm(ctx).map_err(|e| anyhow::anyhow!("{e}"));
+    Ok(match view {
+        DebugView::RsmFlux => Some(normalised(layer(size, size, &rsm()?[0], &v3))),
+        DebugView::RsmNormal => Some(layer(size, size, &rsm()?[1], &|c| {
+            if c == &[0.0; 4] {
+                Vec3::ZERO
+            } else {
+                0.5 * v3(c) + Vec3::splat(0.5)
+            }
+        })),
+        DebugView::RsmPosition => Some(layer(size, size, &rsm()?[2], &|c| {
+            if c[3] > 0.0 {
+                (v3(c) - scene_grid.origin) / (scene_grid.cell * scene_grid.n as f32)
+            } else {
+                Vec3::ZERO
+            }
+        })),
+        DebugView::LpvSlices => {
+            let vol = lpv
+                .read_volume(ctx, lpv.grids.len() - 1)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            Some(slices(&vol))
+        }
+        _ => None,
+    })
+}
+
+/// `img` over its largest component (unchanged if black).
+fn normalised(mut img: Image) -> Image {
+    let m = img
+        .data
+        .iter()
+        .map(|p| p.max_element())
+        .fold(0.0f32, f32::max);
+    if m > 0.0 {
+        for p in &mut img.data {
+            *p /= m;
+        }
+    }
+    img
+}
+
+/// A volume's z-slices side by side, ⌈√n⌉ per row, each cell its mean radiance I₀/s².
+pub fn slices(vol: &lightlab_core::lpv::Volume) -> Image {
+    let g = vol.grid;
+    let n = g.n;
+    let per_row = (n as f32).sqrt().ceil() as u32;
+    let rows = n.div_ceil(per_row);
+    let mut img = Image::new(per_row * n, rows * n);
+    let k = lightlab_core::lpv::Y00 / (g.cell * g.cell);
+    for z in 0..n {
+        let (ox, oy) = ((z % per_row) * n, (z / per_row) * n);
+        for y in 0..n {
+            for x in 0..n {
+                let c = vol.at(glam::IVec3::new(x as i32, y as i32, z as i32));
+                // Image rows go down, the volume's y up.
+                let px = (oy + n - 1 - y) * img.width + ox + x;
+                img.data[px as usize] = glam::Vec3::new(c[0][0], c[1][0], c[2][0]) * k;
+            }
+        }
+    }
+    img
 }

@@ -845,8 +845,50 @@ fn lpv_techniques_render_and_reject_bad_options() {
     // (which adds the emitter).
     assert!(means[1] > 0.0 && means[1] < means[0], "{means:?}");
     assert!(means[2] > 0.0);
+    // Debug layers: the G-buffer at the frame's size, the RSM at its own, the scene volume's
+    // 16 slices as 4 × 4 tiles of 16² cells; each holds something.
+    for (view, size) in [
+        ("albedo", 32),
+        ("normal", 32),
+        ("material", 32),
+        ("depth", 32),
+        ("rsm-flux", 64),
+        ("rsm-normal", 64),
+        ("rsm-position", 64),
+        ("lpv-slices", 64),
+    ] {
+        let exr = dir.path().join(format!("{view}.exr"));
+        let o = lightlab(&[
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            "lpv",
+            "--debug-view",
+            view,
+            "--lpv-grid",
+            "16",
+            "--lpv-cascades",
+            "2",
+            "--rsm-size",
+            "64",
+            "--width",
+            "32",
+            "-o",
+            exr.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{view}: {}", stderr(&o));
+        let img = lightlab_core::image::Image::read(&exr).unwrap();
+        assert_eq!((img.width, img.height), (size, size), "{view}");
+        assert!(img.mean().max_element() > 0.0, "{view} is black");
+    }
     let out = dir.path().join("x.png");
-    for bad in [["--lpv-grid", "2"], ["--rsm-size", "8"]] {
+    for bad in [
+        ["--lpv-grid", "2"],
+        ["--rsm-size", "8"],
+        ["--lpv-cascades", "5"],
+        ["--lpv-damping", "9"],
+    ] {
         let o = lightlab(&[
             "render",
             "--scene",

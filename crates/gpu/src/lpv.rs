@@ -743,6 +743,25 @@ impl Lpv {
         &self.rsm_textures
     }
 
+    /// The last light's RSM read back, row-major: flux (+0), unit normal + diffuse
+    /// transmission, position + texel area (0 where the light sees nothing).
+    pub fn read_rsm(&self, ctx: &GpuContext) -> Result<[Vec<[f32; 4]>; 3], String> {
+        let read = |i: usize, bpp: u32| {
+            crate::raster::read_texture(ctx, &self.rsm_textures[i], bpp).map_err(|e| e.to_string())
+        };
+        let half4 = |b: Vec<u8>| -> Vec<[f32; 4]> {
+            bytemuck::cast_slice::<u8, [half::f16; 4]>(&b)
+                .iter()
+                .map(|c| c.map(|v| v.to_f32()))
+                .collect()
+        };
+        Ok([
+            half4(read(0, 8)?),
+            half4(read(1, 8)?),
+            bytemuck::cast_slice::<u8, [f32; 4]>(&read(2, 16)?).to_vec(),
+        ])
+    }
+
     /// Record the LPV passes of one frame. `ts(label, compute)` hands out timestamp writes.
     pub fn record<'q>(
         &self,

@@ -347,6 +347,7 @@ struct Targets {
     hdr_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
     gbuffer: Vec<wgpu::TextureView>,
+    gbuffer_textures: Vec<wgpu::Texture>,
     mask: wgpu::Texture,
     mask_view: wgpu::TextureView,
     ldr_view: wgpu::TextureView,
@@ -1116,12 +1117,23 @@ impl Renderer {
             rt | sampled | wgpu::TextureUsages::COPY_SRC,
         );
         let depth = texture(device, "depth", s.width, s.height, 1, DEPTH, rt);
-        let gbuffer: Vec<wgpu::TextureView> = gb_formats
+        let gbuffer_textures: Vec<wgpu::Texture> = gb_formats
             .iter()
             .map(|f| {
-                texture(device, "g-buffer", s.width, s.height, 1, *f, rt | sampled)
-                    .create_view(&Default::default())
+                texture(
+                    device,
+                    "g-buffer",
+                    s.width,
+                    s.height,
+                    1,
+                    *f,
+                    rt | sampled | wgpu::TextureUsages::COPY_SRC,
+                )
             })
+            .collect();
+        let gbuffer: Vec<wgpu::TextureView> = gbuffer_textures
+            .iter()
+            .map(|t| t.create_view(&Default::default()))
             .collect();
         let mask = texture(
             device,
@@ -1146,6 +1158,7 @@ impl Renderer {
             hdr,
             depth_view: depth.create_view(&Default::default()),
             gbuffer,
+            gbuffer_textures,
             mask_view: mask.create_view(&Default::default()),
             mask,
             ldr_view: ldr.create_view(&Default::default()),
@@ -2271,6 +2284,32 @@ impl Renderer {
             *px = Vec3::new(c[0].to_f32(), c[1].to_f32(), c[2].to_f32());
         }
         Ok(img)
+    }
+
+    /// The last frame's G-buffer (deferred path only), row-major per layer: diffuse
+    /// reflectance + dielectric F0, shading normal + roughness, F0 + (model + transmission),
+    /// camera-relative position + 1 (0 where nothing was drawn).
+    pub fn read_gbuffer(&self, ctx: &GpuContext) -> Result<Vec<Vec<[f32; 4]>>, RasterError> {
+        if self.settings.path != RenderPath::Deferred {
+            return Err(RasterError::Settings(
+                "only the deferred path writes a G-buffer".into(),
+            ));
+        }
+        self.targets
+            .gbuffer_textures
+            .iter()
+            .map(|t| {
+                let bytes = read_texture(ctx, t, t.format().block_copy_size(None).unwrap_or(8))?;
+                Ok(if t.format() == wgpu::TextureFormat::Rgba32Float {
+                    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
+                } else {
+                    bytemuck::cast_slice::<u8, [half::f16; 4]>(&bytes)
+                        .iter()
+                        .map(|c| c.map(|v| v.to_f32()))
+                        .collect()
+                })
+            })
+            .collect()
     }
 
     /// Per light, which pixels the shadow method lets the light reach (255) or not (0),

@@ -4,7 +4,7 @@
 use glam::Vec3;
 use lightlab_core::lpv::{self, Occlusion, Surfel, Volume, Vpl};
 use lightlab_gpu::lpv::{LpvScheme, LpvSettings, rsm_lights};
-use lightlab_gpu::raster::{Ambient, RasterSettings, Renderer, ShadowMethod, read_texture};
+use lightlab_gpu::raster::{Ambient, RasterSettings, Renderer, ShadowMethod};
 use lightlab_gpu::{GpuContext, test_context};
 use lightlab_scene::Scene;
 
@@ -23,22 +23,7 @@ fn render_lpv(ctx: &GpuContext, scene: &Scene, s: &LpvSettings) -> Renderer {
 
 /// The RSM texels (flux, normal, position) read back from the GPU.
 fn read_rsm(ctx: &GpuContext, r: &Renderer) -> Vec<([f32; 4], [f32; 4], [f32; 4])> {
-    let t = r.lpv().unwrap().rsm_textures();
-    let flux = read_texture(ctx, &t[0], 8).unwrap();
-    let normal = read_texture(ctx, &t[1], 8).unwrap();
-    let pos = read_texture(ctx, &t[2], 16).unwrap();
-    let h = |b: &[u8]| -> Vec<[f32; 4]> {
-        let v: &[u16] = bytemuck::cast_slice(b);
-        v.chunks_exact(4)
-            .map(|c| std::array::from_fn(|k| half::f16::from_bits(c[k]).to_f32()))
-            .collect()
-    };
-    let f: Vec<[f32; 4]> = h(&flux);
-    let n: Vec<[f32; 4]> = h(&normal);
-    let p: Vec<[f32; 4]> = bytemuck::cast_slice::<u8, f32>(&pos)
-        .chunks_exact(4)
-        .map(|c| c.try_into().unwrap())
-        .collect();
+    let [f, n, p] = r.lpv().unwrap().read_rsm(ctx).unwrap();
     f.into_iter()
         .zip(n)
         .zip(p)

@@ -398,7 +398,13 @@ fn lpv_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 // the indirect-only view).
 fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     if frame.lpv_mode != 0u {
-        let indirect = s.diffuse / PI * lpv_irradiance(s.p, s.n);
+        // Thin foliage (diffuse transmission t): 1 − t of the light arriving on the front is
+        // reflected, t of the light arriving on the back leaves through the front.
+        var e = lpv_irradiance(s.p, s.n);
+        if s.transmission > 0.0 {
+            e = (1.0 - s.transmission) * e + s.transmission * lpv_irradiance(s.p, -s.n);
+        }
+        let indirect = s.diffuse / PI * e;
         if frame.lpv_indirect_only == 1u {
             return indirect;
         }
