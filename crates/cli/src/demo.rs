@@ -136,6 +136,14 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
             } else {
                 vec![]
             };
+            // Light propagation volumes on the scenes of the LPV issue: the leafy bush, cornell
+            // and the room (default settings: 32³, 8 steps, RSM 256²).
+            let lpv_techniques = if matches!(name, "bush" | "cornell" | "room") {
+                crate::lpv_cmd::LPV_TECHNIQUES.to_vec()
+            } else {
+                vec![]
+            };
+            let lpv_args = crate::lpv_cmd::LpvArgs::default();
             let sh_bake = crate::bake_cmd::BakeArgs {
                 texels_per_metre: 12.0,
                 transfer_samples: match quality {
@@ -152,6 +160,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 .into_iter()
                 .chain(lightmap_techniques)
                 .chain(sh_techniques)
+                .chain(lpv_techniques)
             {
                 let t = Instant::now();
                 let (img, times) = if crate::prt_cmd::SH_TECHNIQUES.contains(&technique) {
@@ -162,7 +171,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                             if sh_lightmaps.is_none() {
                                 match sh_data_for(&scene, "shl", None, &sh_bake, &sh_args)? {
                                     ShData::Textured(sl) => sh_lightmaps = Some(sl),
-                                    _ => unreachable!("shl data is textured"),
+                                    _ => anyhow::bail!("the shl bake gave per-vertex data"),
                                 }
                             }
                             let sl = sh_lightmaps.clone().expect("baked above");
@@ -179,6 +188,17 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                         technique,
                         &args,
                         &sh_args,
+                        settings.width,
+                        settings.height,
+                        0,
+                    )?
+                } else if crate::lpv_cmd::LPV_TECHNIQUES.contains(&technique) {
+                    crate::lpv_cmd::render_lpv(
+                        ctx,
+                        &scene,
+                        technique,
+                        &args,
+                        &lpv_args,
                         settings.width,
                         settings.height,
                         0,

@@ -302,6 +302,11 @@ fn demo_preview_writes_a_report_with_every_scene() {
         for t in ["phong", "phong-shadow-volumes", "phong-shadow-maps"] {
             assert!(html.contains(&format!("shadows-{t}.png")), "{t}");
         }
+        for s in ["bush", "cornell", "room"] {
+            for t in ["lpv", "lpv-faithful"] {
+                assert!(html.contains(&format!("{s}-{t}.png")), "{s}-{t}");
+            }
+        }
         assert!(html.contains("frame ms"));
     }
 }
