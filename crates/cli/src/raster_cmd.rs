@@ -337,6 +337,14 @@ pub fn bench_frame(
         println!("  {:<16} {gpu:>9.3} ms", "GPU total");
     }
     println!("  {:<16} {cpu:>9.3} ms", "CPU volumes");
+    let lpv_bytes = r.lpv().map(|l| l.memory_bytes());
+    if let Some(b) = lpv_bytes {
+        println!(
+            "  {:<16} {:>9.3} MiB",
+            "LPV memory",
+            b as f64 / (1 << 20) as f64
+        );
+    }
     let projection = median(projection);
     if projector.is_some() {
         println!("  {:<16} {projection:>9.3} ms", "CPU SH light");
@@ -354,6 +362,8 @@ pub fn bench_frame(
                 "adapter": ctx.info.name, "backend": format!("{:?}", ctx.info.backend),
                 "frames": f.frames, "passes_ms": passes, "gpu_ms": gpu,
                 "cpu_volumes_ms": cpu, "cpu_sh_light_ms": projection, "wall_ms": wall,
+                "lpv_bytes": lpv_bytes, "grid": r.lpv().map(|l| l.settings.grid),
+                "rsm": r.lpv().map(|l| l.settings.rsm_size),
             })
         );
     }

@@ -804,4 +804,51 @@ mod tests {
         assert_eq!((c, w), (0, 1.0));
         assert_eq!(cascade_weight(&a, Vec3::splat(-0.5), 2.0, 2.0).0, 2);
     }
+
+    #[test]
+    fn two_band_transport_is_diffusive() {
+        // What limits an LPV's reach (docs/lpv.md): a VPL's light does not stream outwards at a
+        // cell per step but diffuses. One cosine lobe facing +y: after t steps the flux's mean
+        // distance grows like √t, and the accumulated irradiance straight above falls well
+        // below the inverse-square law beyond a few cells.
+        let g = grid(33);
+        let src = IVec3::new(16, 2, 16);
+        let vpl = Vpl {
+            position: g.centre(src) - 0.5 * Vec3::Y,
+            normal: Vec3::Y,
+            flux: Vec3::ONE,
+        };
+        let seed = inject(g, &[vpl]);
+        let mut cur = seed.clone();
+        let mut acc = seed.clone();
+        let mut radius = vec![];
+        for _ in 0..16 {
+            cur = propagate_step(&cur, None);
+            acc.accumulate(&cur);
+            let (mut m, mut w) = (0.0f64, 0.0f64);
+            for c in g.cells() {
+                let f = cur.at(c)[0][0] as f64;
+                m += f * (c - src).as_vec3().length() as f64;
+                w += f;
+            }
+            radius.push(m / w);
+        }
+        eprintln!(
+            "mean distance of the flux after 1, 4, 9, 16 steps: {:.2} {:.2} {:.2} {:.2}",
+            radius[0], radius[3], radius[8], radius[15]
+        );
+        // Free streaming would put it at t cells; diffusion at ∝ √t.
+        assert!(
+            radius[15] < 6.0 && radius[15] > 2.0 * radius[0],
+            "{radius:?}"
+        );
+        // E·π·r²/Φ above the source on a receiver facing it: 1 for the exact inverse square law.
+        let ratio = |r: i32| {
+            let p = g.centre(src + IVec3::new(0, r, 0)) - 0.5 * Vec3::Y;
+            acc.irradiance(p, -Vec3::Y).x * std::f32::consts::PI * (r as f32).powi(2)
+        };
+        let (r2, r4, r8) = (ratio(2), ratio(4), ratio(8));
+        eprintln!("E·πr²/Φ straight above at 2, 4, 8 cells: {r2:.3} {r4:.3} {r8:.3} (exact: 1)");
+        assert!(r2 > 0.5 && r8 < 0.4 * r2, "{r2} {r4} {r8}");
+    }
 }

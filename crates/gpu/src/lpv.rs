@@ -733,6 +733,18 @@ impl Lpv {
         })
     }
 
+    /// GPU memory of the volumes and the RSM [bytes]: per cascade the fixed-point injection
+    /// atomics (48 B/cell), the ping-pong and accumulation buffers (3 × 48 B/cell), the geometry
+    /// volume and its atomics (2 × 16 B per (n+1)³ cell), plus the three RGBA16F 3D textures
+    /// (24 B/cell) and the RSM (flux, normal: 8 B, position: 16 B, depth: 4 B per texel).
+    pub fn memory_bytes(&self) -> u64 {
+        let n = self.grids[0].n as u64;
+        let cascades = self.grids.len() as u64;
+        let per_cascade = 4 * CELL_BYTES * n.pow(3) + 32 * (n + 1).pow(3) + 24 * n.pow(3);
+        let rsm = (self.settings.rsm_size as u64).pow(2) * (8 + 8 + 16 + 4);
+        cascades * per_cascade + rsm
+    }
+
     /// Number of RSM lights (directional, spot, emissive instances).
     pub fn light_count(&self) -> usize {
         self.lights
