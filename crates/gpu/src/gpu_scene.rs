@@ -97,6 +97,7 @@ pub fn material_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             tex(2),
             tex(3),
             tex(4),
+            tex(6),
             wgpu::BindGroupLayoutEntry {
                 binding: 5,
                 visibility: wgpu::ShaderStages::FRAGMENT,
@@ -336,6 +337,11 @@ impl GpuScene {
                 ];
                 let mut flags = 0u32;
                 let mut uv_sets = 0u32;
+                if let Some(r) = m.transmission_texture {
+                    // Bit 5 (bit 4 is double-sided).
+                    flags |= 32;
+                    uv_sets |= (r.uv_set & 1) << 5;
+                }
                 for (i, r) in refs.iter().enumerate() {
                     if let Some(r) = r {
                         flags |= 1 << i;
@@ -403,6 +409,12 @@ impl GpuScene {
                         wgpu::BindGroupEntry {
                             binding: 5,
                             resource: wgpu::BindingResource::Sampler(&sampler),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 6,
+                            resource: wgpu::BindingResource::TextureView(view(
+                                m.transmission_texture,
+                            )),
                         },
                     ],
                 });

@@ -250,10 +250,30 @@ impl Importer<'_> {
             ),
             None => (None, 1.0),
         };
-        let transmission = m
-            .extension_value("KHR_materials_diffuse_transmission")
+        let dt = m.extension_value("KHR_materials_diffuse_transmission");
+        let transmission = dt
             .and_then(|v| v.get("diffuseTransmissionFactor")?.as_f64())
             .unwrap_or(0.0) as f32;
+        let transmission_texture = match dt.and_then(|v| v.get("diffuseTransmissionTexture")) {
+            None => None,
+            Some(info) => {
+                let index = info.get("index").and_then(|i| i.as_u64());
+                let tex = index.and_then(|i| self.doc.textures().nth(i as usize));
+                let Some(tex) = tex else {
+                    return Err(gltf_err(
+                        self.path,
+                        format!(
+                            "material '{}': diffuseTransmissionTexture has no valid index",
+                            m.name().unwrap_or("material")
+                        ),
+                    ));
+                };
+                Some(TextureRef {
+                    texture: self.texture(tex, false)?,
+                    uv_set: info.get("texCoord").and_then(|t| t.as_u64()).unwrap_or(0) as u32,
+                })
+            }
+        };
         let brdf = match extras_json(m.extras())
             .and_then(|v| v.get("lightlab")?.get("brdf")?.as_str().map(str::to_owned))
         {
@@ -291,6 +311,7 @@ impl Importer<'_> {
             },
             double_sided: m.double_sided(),
             transmission,
+            transmission_texture,
             brdf,
         })
     }
@@ -684,10 +705,11 @@ impl Writer {
             }
             if m.transmission != 0.0 {
                 use_ext("KHR_materials_diffuse_transmission", &mut used);
-                exts.insert(
-                    "KHR_materials_diffuse_transmission".into(),
-                    json!({ "diffuseTransmissionFactor": m.transmission }),
-                );
+                let mut dt = json!({ "diffuseTransmissionFactor": m.transmission });
+                if let Some(r) = &m.transmission_texture {
+                    dt["diffuseTransmissionTexture"] = tinfo(r);
+                }
+                exts.insert("KHR_materials_diffuse_transmission".into(), dt);
             }
             if !exts.is_empty() {
                 v["extensions"] = Value::Object(exts);

@@ -215,6 +215,9 @@ pub struct Material {
     /// KHR_materials_diffuse_transmission `diffuseTransmissionFactor`: the fraction of diffusely
     /// scattered light that leaves through the back side (thin foliage).
     pub transmission: f32,
+    /// `diffuseTransmissionTexture`: a translucency map whose alpha scales `transmission`
+    /// (linear).
+    pub transmission_texture: Option<TextureRef>,
     /// The reflection model (glTF `extras.lightlab.brdf`; default the glTF model).
     pub brdf: BrdfModel,
 }
@@ -237,6 +240,7 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
             transmission: 0.0,
+            transmission_texture: None,
             brdf: BrdfModel::Pbr,
         }
     }

@@ -40,6 +40,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
             m.metallic_roughness_texture,
             m.emissive_texture,
             m.normal_texture,
+            m.transmission_texture,
         ];
         if refs.iter().flatten().any(|r| r.texture >= ntex) {
             return Err(content(

@@ -65,6 +65,10 @@ impl Bsdf {
             metallic *= t.z;
         }
         let base = base.truncate();
+        let mut transmission = material.transmission;
+        if let Some(r) = material.transmission_texture {
+            transmission *= scene.textures[r.texture].sample(uv).w;
+        }
         let f0d = 0.04 * material.specular;
         let f0 = Vec3::splat(f0d).lerp(base, metallic);
         let model = material.brdf;
@@ -95,7 +99,7 @@ impl Bsdf {
         Bsdf {
             base,
             kd_scale,
-            transmission: material.transmission.clamp(0.0, 1.0),
+            transmission: transmission.clamp(0.0, 1.0),
             f0,
             alpha,
             specular,

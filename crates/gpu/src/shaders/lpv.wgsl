@@ -123,7 +123,7 @@ fn rsm_fs(in: RsmVertex) -> RsmTexel {
     }
     var o: RsmTexel;
     o.flux = vec4<f32>(base.rgb * (1.0 - material.metallic) * flux_in, 0.0);
-    o.normal = vec4<f32>(n, material.transmission);
+    o.normal = vec4<f32>(n, material_transmission(in.uv0, in.uv1));
     o.position = vec4<f32>(in.world, area);
     return o;
 }

@@ -15,6 +15,8 @@ struct VertexIn {
 @group(1) @binding(3) var normal_tex: texture_2d<f32>;
 @group(1) @binding(4) var emissive_tex: texture_2d<f32>;
 @group(1) @binding(5) var tex_sampler: sampler;
+// Translucency map (KHR_materials_diffuse_transmission: alpha scales the factor); flag bit 5.
+@group(1) @binding(6) var transmission_tex: texture_2d<f32>;
 
 // The UV set texture `i` reads (bit i of uv_sets).
 fn material_uv(i: u32, uv0: vec2<f32>, uv1: vec2<f32>) -> vec2<f32> {
@@ -22,6 +24,15 @@ fn material_uv(i: u32, uv0: vec2<f32>, uv1: vec2<f32>) -> vec2<f32> {
         return uv1;
     }
     return uv0;
+}
+
+// Diffuse transmission of thin surfaces: the factor × the translucency map's alpha.
+fn material_transmission(uv0: vec2<f32>, uv1: vec2<f32>) -> f32 {
+    var t = material.transmission;
+    if (material.flags & 32u) != 0u {
+        t *= textureSample(transmission_tex, tex_sampler, material_uv(5u, uv0, uv1)).a;
+    }
+    return clamp(t, 0.0, 1.0);
 }
 
 fn material_base(uv0: vec2<f32>, uv1: vec2<f32>) -> vec4<f32> {

@@ -237,7 +237,7 @@ fn surface(in: VertexOut, front: bool) -> Surface {
     }
     s.roughness = roughness;
     s.model = material.model;
-    s.transmission = material.transmission;
+    s.transmission = material_transmission(in.uv0, in.uv1);
     return s;
 }
 

@@ -480,6 +480,36 @@ fn leaf_texture() -> Texture {
     }
 }
 
+/// The leaf's translucency map (linear; alpha scales the diffuse transmission): the thin lamina
+/// lets light through, the veins less and the midrib least, as in the WPI report's leaves.
+fn leaf_translucency() -> Texture {
+    let n = 64u32;
+    let mut data = Vec::with_capacity((n * n) as usize);
+    for y in 0..n {
+        for x in 0..n {
+            let s = (x as f32 + 0.5) / n as f32 - 0.5;
+            let t = (y as f32 + 0.5) / n as f32;
+            let rib = s.abs() < 0.03;
+            let vein = ((t * 14.0 - s.abs() * 10.0).fract() - 0.5).abs() < 0.06;
+            let a = if rib {
+                0.25
+            } else if vein {
+                0.6
+            } else {
+                1.0
+            };
+            data.push(Vec4::new(1.0, 1.0, 1.0, a));
+        }
+    }
+    Texture {
+        name: "leaf_translucency".into(),
+        width: n,
+        height: n,
+        data,
+        srgb: false,
+    }
+}
+
 /// A bush of about 20,000 leaf triangles (10,000 alpha-tested, double-sided, translucent quads)
 /// on a trunk and branches, over a ground plane, lit by the sun and a dim sky.
 fn bush() -> Scene {
@@ -487,6 +517,7 @@ fn bush() -> Scene {
     let ground = s.add_material(Material::diffuse("ground", Vec3::new(0.3, 0.28, 0.18)));
     let bark = s.add_material(Material::diffuse("bark", Vec3::new(0.25, 0.17, 0.1)));
     s.textures.push(leaf_texture());
+    s.textures.push(leaf_translucency());
     let leaf = s.add_material(Material {
         name: "leaf".into(),
         base_color: Vec4::ONE,
@@ -498,7 +529,11 @@ fn bush() -> Scene {
         specular: 0.3,
         alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
         double_sided: true,
-        transmission: 0.4,
+        transmission: 0.45,
+        transmission_texture: Some(TextureRef {
+            texture: 1,
+            uv_set: 0,
+        }),
         ..Default::default()
     });
     s.add_mesh(
