@@ -37,6 +37,13 @@ pub enum VariantArg {
 /// Options of the GPU techniques.
 #[derive(Args, Clone, Debug)]
 pub struct RasterArgs {
+    /// Wind sway of foliage [m at the tips] (materials' `extras.lightlab.sway`), the same in
+    /// every pass; needs shadow maps, not volumes. `bench frame` animates it at 60 Hz.
+    #[arg(long, default_value_t = 0.0)]
+    pub wind: f32,
+    /// The wind's time [s] (its gusts' phase).
+    #[arg(long, default_value_t = 0.0)]
+    pub wind_time: f32,
     /// Forward (one scene pass per light) or deferred (G-buffer, one screen pass per light).
     #[arg(long, value_enum, default_value_t = PathArg::Forward)]
     pub path: PathArg,
@@ -76,6 +83,8 @@ pub struct RasterArgs {
 impl Default for RasterArgs {
     fn default() -> Self {
         RasterArgs {
+            wind: 0.0,
+            wind_time: 0.0,
             path: PathArg::Forward,
             attenuation: "fuchs4".into(),
             light_radius: None,
@@ -167,6 +176,15 @@ pub fn settings(
         ambient,
         shadow_size: a.shadow_size,
         pcf_radius: a.pcf,
+        wind: {
+            let w = lightlab_core::wind::Wind::breeze(
+                glam::Vec3::new(1.0, 0.0, 0.4),
+                a.wind,
+                a.wind_time,
+            );
+            w.validate().map_err(|e| anyhow::anyhow!("--wind: {e}"))?;
+            w
+        },
         ..Default::default()
     })
 }
@@ -297,7 +315,12 @@ pub fn bench_frame(
     let mut per_pass: std::collections::BTreeMap<&'static str, Vec<f64>> = Default::default();
     let (mut gpu, mut wall, mut cpu) = (vec![], vec![], vec![]);
     let mut projection = vec![];
-    for _ in 0..f.frames {
+    for frame in 0..f.frames {
+        if r.settings.wind.amplitude > 0.0 {
+            let mut w = r.settings.wind;
+            w.time = a.wind_time + frame as f32 / 60.0;
+            r.set_wind(&ctx, w)?;
+        }
         if let Some((p, sc)) = &projector {
             let t0 = std::time::Instant::now();
             let light = p.project(sc, None);

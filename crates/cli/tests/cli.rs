@@ -888,6 +888,36 @@ fn lpv_techniques_render_and_reject_bad_options() {
         assert!(img.mean().max_element() > 0.0, "{view} is black");
     }
     let out = dir.path().join("x.png");
+    // Wind: sways with shadow maps (lpv), refused with shadow volumes (built on the CPU).
+    let windy = |t: &str| {
+        lightlab(&[
+            "render",
+            "--scene",
+            "bush",
+            "--technique",
+            t,
+            "--wind",
+            "0.1",
+            "--lpv-grid",
+            "8",
+            "--rsm-size",
+            "32",
+            "--width",
+            "16",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = windy("lpv");
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::remove_file(&out).unwrap();
+    let o = windy("phong-shadow-volumes");
+    assert!(
+        !o.status.success() && stderr(&o).contains("shadow maps"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
     for bad in [
         ["--lpv-grid", "2"],
         ["--rsm-size", "8"],

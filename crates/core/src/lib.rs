@@ -15,6 +15,7 @@
 //! - [`quadrature`]: direction sets (exact Gauss and stratified);
 //! - [`lpv`]: light propagation volumes on the CPU (Kaplanyan's 6-face scheme with geometry
 //!   volume, and the WPI report's 18-neighbour scheme), the reference of the GPU passes;
+//! - [`wind`]: the wind sway of foliage shared by every pass and the CPU;
 //! - [`param`]: sphere parameterisations (lat-long, angular, sphere map, octahedral, dual
 //!   paraboloid, cube) with per-texel solid angles.
 //!
@@ -31,5 +32,6 @@ pub mod quadrature;
 pub mod sampling;
 pub mod sh;
 pub mod sh_env;
+pub mod wind;
 
 pub use glam;

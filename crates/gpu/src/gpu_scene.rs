@@ -85,7 +85,8 @@ pub fn material_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         entries: &[
             wgpu::BindGroupLayoutEntry {
                 binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
+                // The vertex stage reads the wind sway weight.
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                 ty: wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
                     has_dynamic_offset: false,
@@ -373,6 +374,10 @@ impl GpuScene {
                     },
                     flags,
                     uv_sets,
+                    sway: m.sway,
+                    pad0: 0.0,
+                    pad1: 0.0,
+                    pad2: 0.0,
                 };
                 let ubuf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some(&m.name),

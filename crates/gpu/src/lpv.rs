@@ -189,6 +189,9 @@ pub struct LpvUniforms {
     pub pad0: u32,
     pub pad1: u32,
     pub pad2: u32,
+    /// Wind sway (lightlab_core::wind::Wind::uniform), the same as the camera passes'.
+    pub wind_a: [f32; 4],
+    pub wind_b: [f32; 4],
 }
 
 /// WGSL `RsmLight`: one light of the reflective shadow maps.
@@ -360,6 +363,9 @@ pub struct Lpv {
     rsm_depth: wgpu::TextureView,
     compute: Compute,
     cascades: Vec<Cascade>,
+    /// The uniform slots (2 per cascade) and their bytes, rewritten when the wind changes.
+    uniforms: wgpu::Buffer,
+    uniform_bytes: Vec<u8>,
     /// The three 3D textures (r, g, b) the renderer samples, the cascades stacked along z.
     pub textures: [wgpu::Texture; 3],
 }
@@ -375,6 +381,7 @@ impl Lpv {
         settings: LpvSettings,
         eye: Vec3,
         forward: Vec3,
+        wind: &lightlab_core::wind::Wind,
     ) -> Result<Lpv, String> {
         settings.validate()?;
         let device = &ctx.device;
@@ -399,6 +406,8 @@ impl Lpv {
             wpi_samples: settings.wpi_samples,
             store_last: (settings.scheme == LpvScheme::Wpi) as u32,
             occlusion: 0,
+            wind_a: wind.uniform()[0],
+            wind_b: wind.uniform()[1],
             ..Default::default()
         };
         let gv_on = settings.occlusion && settings.scheme == LpvScheme::Kaplanyan;
@@ -729,6 +738,8 @@ impl Lpv {
             rsm_depth,
             compute,
             cascades,
+            uniforms,
+            uniform_bytes,
             textures,
         })
     }
@@ -743,6 +754,18 @@ impl Lpv {
         let per_cascade = 4 * CELL_BYTES * n.pow(3) + 32 * (n + 1).pow(3) + 24 * n.pow(3);
         let rsm = (self.settings.rsm_size as u64).pow(2) * (8 + 8 + 16 + 4);
         cascades * per_cascade + rsm
+    }
+
+    /// Sway the RSM's geometry with `wind` from the next frame on.
+    pub fn set_wind(&mut self, ctx: &GpuContext, wind: &lightlab_core::wind::Wind) {
+        let size = std::mem::size_of::<LpvUniforms>();
+        for slot in self.uniform_bytes.chunks_mut(SLOT as usize) {
+            let mut u: LpvUniforms = bytemuck::pod_read_unaligned(&slot[..size]);
+            [u.wind_a, u.wind_b] = wind.uniform();
+            slot[..size].copy_from_slice(bytemuck::bytes_of(&u));
+        }
+        ctx.queue
+            .write_buffer(&self.uniforms, 0, &self.uniform_bytes);
     }
 
     /// Number of RSM lights (directional, spot, emissive instances).
@@ -954,7 +977,9 @@ mod tests {
                 layer,
                 pad0,
                 pad1,
-                pad2
+                pad2,
+                wind_a,
+                wind_b
             ),
         )
         .unwrap();

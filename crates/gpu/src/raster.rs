@@ -276,6 +276,9 @@ pub struct RasterSettings {
     /// Scissor each light's passes to its screen rectangle, and cull objects outside its radius.
     pub scissor: bool,
     pub exposure: f32,
+    /// Wind sway of foliage, the same in every pass (amplitude 0: none). Shadow volumes are
+    /// built on the CPU from the rest pose, so wind needs another shadow method.
+    pub wind: lightlab_core::wind::Wind,
 }
 
 impl Default for RasterSettings {
@@ -299,6 +302,7 @@ impl Default for RasterSettings {
             planar_plane: None,
             scissor: true,
             exposure: 1.0,
+            wind: Default::default(),
         }
     }
 }
@@ -589,6 +593,23 @@ fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
     })
 }
 
+/// Valid wind parameters, and a shadow method that sways with them.
+fn check_wind(wind: &lightlab_core::wind::Wind, shadows: ShadowMethod) -> Result<(), RasterError> {
+    wind.validate().map_err(RasterError::Settings)?;
+    if wind.amplitude > 0.0
+        && matches!(
+            shadows,
+            ShadowMethod::VolumesZFail | ShadowMethod::VolumesZPass
+        )
+    {
+        return Err(RasterError::Settings(
+            "wind sway needs shadow maps: shadow volumes are built on the CPU from the rest pose"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
 /// The camera projection: reversed depth with an infinite far plane.
 pub fn projection(camera: &Camera, aspect: f32) -> Mat4 {
     directx::perspective_infinite_reverse(camera.yfov, aspect, camera.znear.max(1e-4))
@@ -713,6 +734,7 @@ impl Renderer {
                 "light-maps do not match the scene (one rect per instance, non-empty pages)".into(),
             ));
         }
+        check_wind(&s.wind, s.shadows)?;
         if s.width == 0 || s.height == 0 || s.width > 16384 || s.height > 16384 {
             return Err(RasterError::Settings(format!(
                 "image size {}×{} must be within 1..=16384",
@@ -775,7 +797,7 @@ impl Renderer {
         let lpv_res = lpv
             .map(|(l, _)| {
                 let forward = camera.transform.transform_vector3(-Vec3::Z);
-                crate::lpv::Lpv::new(ctx, scene, l.clone(), camera.position(), forward)
+                crate::lpv::Lpv::new(ctx, scene, l.clone(), camera.position(), forward, &s.wind)
             })
             .transpose()
             .map_err(RasterError::Settings)?;
@@ -864,6 +886,8 @@ impl Renderer {
             view: view.to_cols_array_2d(),
             camera_pos: camera.position().to_array(),
             exposure: s.exposure,
+            wind_a: s.wind.uniform()[0],
+            wind_b: s.wind.uniform()[1],
             viewport: [s.width as f32, s.height as f32],
             light_count: scene.lights.len() as u32,
             shadow_mode: match s.shadows {
@@ -1380,6 +1404,23 @@ impl Renderer {
         self.light_pos.len()
     }
 
+    /// Set the wind (e.g. its time, for animation): every pass sways from the next frame on.
+    pub fn set_wind(
+        &mut self,
+        ctx: &GpuContext,
+        wind: lightlab_core::wind::Wind,
+    ) -> Result<(), RasterError> {
+        check_wind(&wind, self.settings.shadows)?;
+        self.settings.wind = wind;
+        [self.frame.wind_a, self.frame.wind_b] = wind.uniform();
+        ctx.queue
+            .write_buffer(&self.frame_buf, 0, bytemuck::bytes_of(&self.frame));
+        if let Some(l) = &mut self.lpv {
+            l.set_wind(ctx, &wind);
+        }
+        Ok(())
+    }
+
     /// Move the camera (the next frame uses it). Cascades follow only on a new renderer.
     pub fn set_camera(&mut self, ctx: &GpuContext, camera: Camera) {
         let aspect = self.settings.width as f32 / self.settings.height as f32;
@@ -1627,6 +1668,7 @@ impl Renderer {
                     if lowest < -1e-3 {
                         continue;
                     }
+                    pass.set_bind_group(1, &self.scene.materials[d.material].bind_group, &[]);
                     pass.draw_indexed(d.first_index..d.first_index + d.index_count, 0, 0..1);
                 }
             }
@@ -2112,7 +2154,8 @@ impl Pipelines {
                 module,
                 PipeDesc {
                     label: "planar shadows",
-                    layout: pl_frame,
+                    // The material group: the vertex stage sways foliage like the other passes.
+                    layout: pl_shadow,
                     vs: "planar_vs",
                     buffers: &vl,
                     fs: Some("volume_fs"),

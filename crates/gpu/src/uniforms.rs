@@ -53,6 +53,9 @@ pub struct FrameUniforms {
     pub lpv_pad1: u32,
     pub lpv_pad2: u32,
     pub lpv_grids: [[f32; 4]; 4],
+    /// Wind sway (lightlab_core::wind::Wind::uniform).
+    pub wind_a: [f32; 4],
+    pub wind_b: [f32; 4],
 }
 
 /// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional.
@@ -113,6 +116,10 @@ pub struct GpuMaterial {
     pub model: u32,
     pub flags: u32,
     pub uv_sets: u32,
+    pub sway: f32,
+    pub pad0: f32,
+    pub pad1: f32,
+    pub pad2: f32,
 }
 
 /// The WGSL source that declares these structs.
@@ -166,7 +173,9 @@ mod tests {
                     lpv_pad0,
                     lpv_pad1,
                     lpv_pad2,
-                    lpv_grids
+                    lpv_grids,
+                    wind_a,
+                    wind_b
                 ),
             ),
             (
@@ -212,7 +221,11 @@ mod tests {
                     transmission,
                     model,
                     flags,
-                    uv_sets
+                    uv_sets,
+                    sway,
+                    pad0,
+                    pad1,
+                    pad2
                 ),
             ),
         ];

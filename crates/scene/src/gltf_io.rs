@@ -274,6 +274,9 @@ impl Importer<'_> {
                 })
             }
         };
+        let sway = extras_json(m.extras())
+            .and_then(|v| v.get("lightlab")?.get("sway")?.as_f64())
+            .unwrap_or(0.0) as f32;
         let brdf = match extras_json(m.extras())
             .and_then(|v| v.get("lightlab")?.get("brdf")?.as_str().map(str::to_owned))
         {
@@ -312,6 +315,7 @@ impl Importer<'_> {
             double_sided: m.double_sided(),
             transmission,
             transmission_texture,
+            sway,
             brdf,
         })
     }
@@ -714,8 +718,15 @@ impl Writer {
             if !exts.is_empty() {
                 v["extensions"] = Value::Object(exts);
             }
+            let mut extras = serde_json::Map::new();
             if m.brdf != BrdfModel::Pbr {
-                v["extras"] = json!({ "lightlab": { "brdf": m.brdf.name() } });
+                extras.insert("brdf".into(), json!(m.brdf.name()));
+            }
+            if m.sway != 0.0 {
+                extras.insert("sway".into(), json!(m.sway));
+            }
+            if !extras.is_empty() {
+                v["extras"] = json!({ "lightlab": extras });
             }
             materials.push(v);
         }

@@ -218,6 +218,9 @@ pub struct Material {
     /// `diffuseTransmissionTexture`: a translucency map whose alpha scales `transmission`
     /// (linear).
     pub transmission_texture: Option<TextureRef>,
+    /// How much the wind moves this material's vertices (glTF `extras.lightlab.sway`; 0 =
+    /// rigid; `lightlab_core::wind`).
+    pub sway: f32,
     /// The reflection model (glTF `extras.lightlab.brdf`; default the glTF model).
     pub brdf: BrdfModel,
 }
@@ -241,6 +244,7 @@ impl Default for Material {
             double_sided: false,
             transmission: 0.0,
             transmission_texture: None,
+            sway: 0.0,
             brdf: BrdfModel::Pbr,
         }
     }
@@ -446,6 +450,41 @@ impl Scene {
         (0..self.instances.len())
             .filter_map(|i| self.instance_bounds(i))
             .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+    }
+
+    /// The scene as `wind` displaces it: every instance's vertices in world space (identity
+    /// transforms), moved by `lightlab_core::wind::Wind::sway` with its material's weight;
+    /// normals and tangents are carried along unchanged, as the GPU passes do.
+    pub fn swayed(&self, wind: &lightlab_core::wind::Wind) -> Scene {
+        let mut out = self.clone();
+        out.meshes.clear();
+        out.instances.clear();
+        for inst in &self.instances {
+            let src = &self.meshes[inst.mesh];
+            let weight = self.materials.get(src.material).map_or(0.0, |m| m.sway);
+            let nm = inst.normal_matrix();
+            let mut m = src.clone();
+            for p in &mut m.positions {
+                *p = wind.sway(inst.transform.transform_point3(*p), weight);
+            }
+            for n in &mut m.normals {
+                *n = (nm * *n).normalize_or(*n);
+            }
+            for t in &mut m.tangents {
+                let v = inst
+                    .transform
+                    .transform_vector3(t.truncate())
+                    .normalize_or(Vec3::X);
+                *t = v.extend(t.w);
+            }
+            out.meshes.push(m);
+            out.instances.push(Instance {
+                name: inst.name.clone(),
+                mesh: out.meshes.len() - 1,
+                transform: Mat4::IDENTITY,
+            });
+        }
+        out
     }
 
     /// World-space bounds of instance `i`; None for an empty mesh.

@@ -54,6 +54,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
             m.specular,
             m.emissive_strength,
             m.transmission,
+            m.sway,
         ];
         if !m.base_color.is_finite()
             || !m.emissive.is_finite()

@@ -39,6 +39,7 @@ fn assert_same_scene(a: &Scene, b: &Scene) {
         assert_eq!(x.double_sided, y.double_sided);
         assert_eq!(x.transmission, y.transmission);
         assert_eq!(x.transmission_texture, y.transmission_texture);
+        assert_eq!(x.sway, y.sway);
         assert_eq!(x.brdf, y.brdf);
         assert_eq!(x.base_color_texture, y.base_color_texture);
     }

@@ -57,6 +57,9 @@ struct FrameUniforms {
     lpv_pad2: u32,
     // Per cascade, finest first: origin (xyz) and cell size (w).
     lpv_grids: array<vec4<f32>, 4>,
+    // Wind sway (lightlab_core::wind::Wind::uniform).
+    wind_a: vec4<f32>,
+    wind_b: vec4<f32>,
 }
 
 // One light. kind: 0 point, 1 spot, 2 directional. Spot cones as cosines.
@@ -114,10 +117,30 @@ struct GpuMaterial {
     transmission: f32,
     // 0 pbr, 1 lambert, 2 phong, 3 blinn-phong.
     model: u32,
-    // bit 0 base colour, 1 metallic-roughness, 2 normal, 3 emissive texture; bit 4 double-sided.
+    // bit 0 base colour, 1 metallic-roughness, 2 normal, 3 emissive texture; bit 4 double-sided;
+    // bit 5 translucency map.
     flags: u32,
-    // 1 bit per texture (same order): which UV set.
+    // 1 bit per texture (same order; bit 5 the translucency map): which UV set.
     uv_sets: u32,
+    // Wind sway weight of the material's vertices (lightlab_core::wind).
+    sway: f32,
+    pad0: f32,
+    pad1: f32,
+    pad2: f32,
+}
+
+// The wind displacement of a world-space vertex (lightlab_core::wind::Wind::sway): `a` =
+// (direction × amplitude, frequency), `b` = (wavelength, time, ground, height).
+fn sway(p: vec3<f32>, weight: f32, a: vec4<f32>, b: vec4<f32>) -> vec3<f32> {
+    let amp = length(a.xyz);
+    if weight == 0.0 || amp == 0.0 {
+        return p;
+    }
+    let d = a.xyz / amp;
+    let h = clamp((p.y - b.z) / b.w, 0.0, 1.0);
+    let phi = 6.2831853 * (a.w * b.y - dot(d, p) / b.x);
+    let g = sin(phi) + 0.3 * sin(2.7 * phi + 1.3 * p.x + 0.7 * p.z);
+    return p + a.xyz * (weight * h * h * g);
 }
 
 // What the lighting passes need of a visible surface point.

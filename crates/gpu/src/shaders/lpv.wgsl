@@ -37,6 +37,9 @@ struct LpvUniforms {
     pad0: u32,
     pad1: u32,
     pad2: u32,
+    // Wind sway, as FrameUniforms.
+    wind_a: vec4<f32>,
+    wind_b: vec4<f32>,
 }
 
 // One light of the reflective shadow maps.
@@ -74,8 +77,9 @@ struct RsmVertex {
 @vertex
 fn rsm_vs(v: VertexIn) -> RsmVertex {
     var o: RsmVertex;
-    o.clip = light.view_proj * vec4<f32>(v.position, 1.0);
-    o.world = v.position;
+    let p = sway(v.position, material.sway, lpv.wind_a, lpv.wind_b);
+    o.clip = light.view_proj * vec4<f32>(p, 1.0);
+    o.world = p;
     o.normal = v.normal;
     o.uv0 = v.uv0;
     o.uv1 = v.uv1;

@@ -55,8 +55,9 @@ fn scene_vs(
     @builtin(instance_index) ii: u32,
 ) -> VertexOut {
     var o: VertexOut;
-    o.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
-    o.world = v.position;
+    let p = sway(v.position, material.sway, frame.wind_a, frame.wind_b);
+    o.clip = frame.view_proj * vec4<f32>(p, 1.0);
+    o.world = p;
     o.normal = v.normal;
     o.tangent = v.tangent;
     o.uv0 = v.uv0;
@@ -654,8 +655,9 @@ struct ShadowOut {
 @vertex
 fn shadow_vs(v: VertexIn) -> ShadowOut {
     var o: ShadowOut;
-    o.clip = shadow_views[pass_u.shadow_view].view_proj * vec4<f32>(v.position, 1.0);
-    o.world = v.position;
+    let p = sway(v.position, material.sway, frame.wind_a, frame.wind_b);
+    o.clip = shadow_views[pass_u.shadow_view].view_proj * vec4<f32>(p, 1.0);
+    o.world = p;
     o.uv0 = v.uv0;
     o.uv1 = v.uv1;
     return o;
@@ -697,7 +699,8 @@ fn shadow_linear_fs(in: ShadowOut) -> @location(0) vec4<f32> {
 // slot holds the projection matrix); they mark the stencil where the plane is in shadow.
 @vertex
 fn planar_vs(v: VertexIn) -> @builtin(position) vec4<f32> {
-    let flat = shadow_views[pass_u.shadow_view].view_proj * vec4<f32>(v.position, 1.0);
+    let p = sway(v.position, material.sway, frame.wind_a, frame.wind_b);
+    let flat = shadow_views[pass_u.shadow_view].view_proj * vec4<f32>(p, 1.0);
     return frame.view_proj * flat;
 }
 

@@ -515,7 +515,11 @@ fn leaf_translucency() -> Texture {
 fn bush() -> Scene {
     let mut s = Scene::default();
     let ground = s.add_material(Material::diffuse("ground", Vec3::new(0.3, 0.28, 0.18)));
-    let bark = s.add_material(Material::diffuse("bark", Vec3::new(0.25, 0.17, 0.1)));
+    let bark = s.add_material(Material {
+        // Branches move a little in the wind, the leaves fully.
+        sway: 0.2,
+        ..Material::diffuse("bark", Vec3::new(0.25, 0.17, 0.1))
+    });
     s.textures.push(leaf_texture());
     s.textures.push(leaf_translucency());
     let leaf = s.add_material(Material {
@@ -530,6 +534,7 @@ fn bush() -> Scene {
         alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
         double_sided: true,
         transmission: 0.45,
+        sway: 1.0,
         transmission_texture: Some(TextureRef {
             texture: 1,
             uv_set: 0,
