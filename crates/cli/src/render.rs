@@ -222,6 +222,27 @@ fn depth_range(a: &RenderArgs) -> Result<(u32, u32)> {
 }
 
 fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
+    let t = a.technique.as_str();
+    let lpv = crate::lpv_cmd::LPV_TECHNIQUES.contains(&t);
+    if a.indirect_only {
+        bail!(
+            "--indirect-only applies to --technique reference{}",
+            if lpv {
+                "; the volume's indirect light alone is --debug-view indirect"
+            } else {
+                ""
+            }
+        );
+    }
+    if a.bake.bounces.is_some() && (lpv || crate::raster_cmd::RASTER_TECHNIQUES.contains(&t)) {
+        bail!("--bounces applies to --technique reference and to baked techniques, not {t}");
+    }
+    if a.lpv.debug_view != crate::lpv_cmd::DebugView::Final && !lpv {
+        bail!(
+            "--debug-view applies to the LPV techniques ({})",
+            crate::lpv_cmd::LPV_TECHNIQUES.join(", ")
+        );
+    }
     let ctx = crate::raster_cmd::context()?;
     let (w, h) = (a.width, a.height.unwrap_or(a.width));
     let t0 = Instant::now();

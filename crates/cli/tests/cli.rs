@@ -911,6 +911,21 @@ fn lpv_techniques_render_and_reject_bad_options() {
     let o = windy("lpv");
     assert!(o.status.success(), "{}", stderr(&o));
     std::fs::remove_file(&out).unwrap();
+    // Options of other techniques are refused, not ignored.
+    let refused: [&[&str]; 3] = [
+        &["phong", "--debug-view", "indirect"],
+        &["lpv", "--indirect-only"],
+        &["phong-shadow-maps", "--bounces", "2"],
+    ];
+    for args in refused {
+        let mut v = vec!["render", "--scene", "cornell", "--technique"];
+        v.extend(args);
+        v.extend(["--width", "16", "-o", out.to_str().unwrap()]);
+        let o = lightlab(&v);
+        assert!(!o.status.success(), "{args:?} was accepted");
+        assert!(stderr(&o).contains("applies to"), "{}", stderr(&o));
+        assert!(!out.exists());
+    }
     let o = windy("phong-shadow-volumes");
     assert!(
         !o.status.success() && stderr(&o).contains("shadow maps"),
