@@ -1,8 +1,9 @@
 //! Light propagation volumes on the GPU (issue 7): reflective shadow maps, injection,
 //! propagation and the 3D textures the renderer's ambient pass reads (`Renderer::with_lpv`).
 //!
-//! Per frame, [`Lpv::record`] runs, for every RSM light (directional and spot lights, and each
-//! emissive instance as a Lambertian area light seen from its centre):
+//! Per frame, [`Lpv::record`] runs, for every RSM view (directional and spot lights, the six
+//! cube faces of a point light, and each emissive instance as a Lambertian area light seen from
+//! its centre; at most [`MAX_RSM_LIGHTS`]):
 //! 1. the RSM pass: flux, normal (+ diffuse transmission), position (+ texel area ⊥ the light);
 //! 2. injection (compute): Kaplanyan scatters every texel as a cosine lobe into fixed-point
 //!    atomics (WGSL has no float atomics) and, with occlusion, its blocker into the geometry
@@ -13,8 +14,7 @@
 //! colour, which the ambient pass samples trilinearly. `lightlab_core::lpv` is the CPU reference
 //! of each step; `tests/lpv.rs` compares the two.
 //!
-//! Limits: point lights are not injected (they would need six RSM faces); an emissive instance
-//! is seen through a 150° frustum from its centre (light leaving at more than 75° from its
+//! Limits: an emissive instance is seen through a 150° frustum from its centre (light leaving at more than 75° from its
 //! normal is not injected) and one that is not roughly planar (|Σ n·A| < ½ΣA) is skipped.
 
 use crate::GpuContext;
@@ -214,8 +214,8 @@ pub struct RsmLight {
 
 /// Half-angle of the frustum an emissive instance is seen through.
 const AREA_HALF_ANGLE: f32 = 75.0 * std::f32::consts::PI / 180.0;
-/// At most this many RSM lights (the first ones of the scene).
-pub const MAX_RSM_LIGHTS: usize = 8;
+/// At most this many RSM views (the first ones of the scene; a point light takes six).
+pub const MAX_RSM_LIGHTS: usize = 24;
 
 /// The RSM lights of a scene for a volume `grid`, with an upper bound of the flux each can put
 /// into its RSM (for the fixed-point scale).
@@ -276,7 +276,32 @@ pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)>
                     colour.max_element() * 2.0 * std::f32::consts::PI * (1.0 - half.cos()),
                 ));
             }
-            LightKind::Point => {}
+            LightKind::Point => {
+                // Six 90° faces of a cube around the light, each a spot light without falloff
+                // (cos_outer = −1 keeps the spot factor at 1 over the face).
+                let far = far_from(l.position).max(1e-3);
+                let half = std::f32::consts::FRAC_PI_4;
+                let texel = (2.0 * half.tan() / size as f32).powi(2);
+                for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
+                    let view = look_to_mat4(l.position, d, up_for(d));
+                    let proj = directx::perspective(2.0 * half, 1.0, far * 1e-4, far);
+                    out.push((
+                        RsmLight {
+                            view_proj: (proj * view).to_cols_array_2d(),
+                            eye: l.position.to_array(),
+                            kind: 1,
+                            axis: d.to_array(),
+                            texel,
+                            color: colour.to_array(),
+                            cos_inner: 0.0,
+                            cos_outer: -1.0,
+                            ..Default::default()
+                        },
+                        // Each face holds at most a sixth of 4π·I (its solid angle is 4π/6).
+                        colour.max_element() * 4.0 * std::f32::consts::PI / 6.0,
+                    ));
+                }
+            }
         }
     }
     for inst in &scene.instances {

@@ -376,3 +376,51 @@ fn moving_the_camera_by_a_fraction_of_a_cell_does_not_flicker() {
         worst[1]
     );
 }
+
+#[test]
+fn a_point_light_in_a_closed_box_injects_all_its_reflected_flux() {
+    // A point light of intensity I at the centre of a closed box of albedo ½: its six RSM faces
+    // see every wall, so the injected flux is ½·4π·I (the seed, before propagation).
+    let Some(ctx) = test_context() else { return };
+    let mut scene = Scene::default();
+    let m = scene.add_material(lightlab_scene::Material {
+        brdf: lightlab_scene::BrdfModel::Lambert,
+        double_sided: true,
+        ..lightlab_scene::Material::diffuse("wall", Vec3::splat(0.5))
+    });
+    let mesh = lightlab_scene::builtin::geom::aabb_box("box", Vec3::ZERO, Vec3::splat(2.0), m);
+    scene.add_mesh(mesh, glam::Mat4::IDENTITY);
+    let intensity = 3.0;
+    scene.lights.push(lightlab_scene::Light {
+        name: "bulb".into(),
+        kind: lightlab_scene::LightKind::Point,
+        color: Vec3::ONE,
+        intensity,
+        position: Vec3::new(0.9, 1.1, 1.0),
+        direction: -Vec3::Y,
+        range: None,
+    });
+    scene.cameras.push(lightlab_scene::Camera::look_at(
+        "inside",
+        Vec3::new(1.0, 1.0, 1.9),
+        Vec3::splat(1.0),
+        Vec3::Y,
+        1.2,
+    ));
+    let s = LpvSettings {
+        grid: 16,
+        rsm_size: 128,
+        iterations: Some(0),
+        occlusion: false,
+        ..Default::default()
+    };
+    let r = render_lpv(&ctx, &scene, &s);
+    assert_eq!(r.lpv().unwrap().light_count(), 6);
+    let flux = r.lpv().unwrap().read_volume(&ctx, 0).unwrap().total_flux();
+    let want = 0.5 * 4.0 * std::f32::consts::PI * intensity;
+    eprintln!("point light in a box: injected flux {flux} (exact {want})");
+    assert!(
+        ((flux - Vec3::splat(want)) / want).abs().max_element() < 0.01,
+        "{flux} vs {want}"
+    );
+}
