@@ -74,6 +74,11 @@ pub struct LpvSettings {
     pub cascades: u32,
     /// Move the camera-following cascades in whole cells only (against flicker).
     pub snap: bool,
+    /// With occlusion, also inject blockers from the camera's view (Kaplanyan: the geometry
+    /// volume from the RSM *and* the G-buffer): surfaces no light sees (a ceiling above the
+    /// lamp) then stop light too. Where a light and the camera see the same surface, the cell
+    /// keeps the larger of the two blockers, not their sum.
+    pub camera_blockers: bool,
     /// Place the cascades for this eye position and view direction instead of the render
     /// camera's (e.g. around a player, or to test a moved camera against a fixed view).
     pub anchor: Option<(Vec3, Vec3)>,
@@ -92,6 +97,7 @@ impl Default for LpvSettings {
             damping: 2.0,
             cascades: 1,
             snap: true,
+            camera_blockers: true,
             anchor: None,
         }
     }
@@ -350,6 +356,35 @@ pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)>
     out
 }
 
+/// The camera as an RSM view without light (kind 3): a square frustum covering its field of
+/// view, whose surfels only block.
+fn camera_view(camera: &lightlab_scene::Camera, aspect: f32, grid: &Grid, size: u32) -> RsmLight {
+    let eye = camera.position();
+    let forward = camera
+        .transform
+        .transform_vector3(-Vec3::Z)
+        .normalize_or(-Vec3::Z);
+    let up = camera
+        .transform
+        .transform_vector3(Vec3::Y)
+        .normalize_or(Vec3::Y);
+    let t = (0.5 * camera.yfov).tan();
+    let half = (t * aspect.max(1.0)).atan().min(1.48);
+    let centre = grid.origin + Vec3::splat(0.5 * grid.cell * grid.n as f32);
+    let far = (eye - centre).length() + 0.87 * grid.cell * grid.n as f32;
+    let view = look_to_mat4(eye, forward, up);
+    let proj = directx::perspective(2.0 * half, 1.0, far.max(1e-3) * 1e-4, far.max(1e-3));
+    RsmLight {
+        view_proj: (proj * view).to_cols_array_2d(),
+        eye: eye.to_array(),
+        kind: 3,
+        axis: forward.to_array(),
+        texel: (2.0 * half.tan() / size as f32).powi(2),
+        color: [0.0; 3],
+        ..Default::default()
+    }
+}
+
 const RSM_FORMATS: [wgpu::TextureFormat; 3] = [
     wgpu::TextureFormat::Rgba16Float,
     wgpu::TextureFormat::Rgba16Float,
@@ -399,23 +434,34 @@ pub struct Lpv {
 const CELL_BYTES: u64 = 48;
 
 impl Lpv {
-    /// The volumes for a camera at `eye` looking along `forward` (where the cascades go).
+    /// The volumes for `camera` (where the cascades go, and whose view adds blockers) with an
+    /// image of `aspect` = width/height.
     pub fn new(
         ctx: &GpuContext,
         scene: &Scene,
         settings: LpvSettings,
-        eye: Vec3,
-        forward: Vec3,
+        camera: &lightlab_scene::Camera,
+        aspect: f32,
         wind: &lightlab_core::wind::Wind,
     ) -> Result<Lpv, String> {
         settings.validate()?;
         let device = &ctx.device;
+        let eye = camera.position();
+        let forward = camera
+            .transform
+            .transform_vector3(-Vec3::Z)
+            .normalize_or(-Vec3::Z);
         let grids = settings.grids_for(scene, eye, forward);
         let grid = *grids.last().expect("at least one cascade");
         let count = grids.len();
         let size = settings.rsm_size;
-        let lights = rsm_lights(scene, &grid, size);
+        let mut lights = rsm_lights(scene, &grid, size);
         let bound = lights.iter().map(|l| l.1).sum::<f32>().max(1e-12);
+        if settings.occlusion && settings.camera_blockers && settings.scheme == LpvScheme::Kaplanyan
+        {
+            // First, so that the last view rendered (the RSM textures' content) is a light's.
+            lights.insert(0, (camera_view(camera, aspect, &grid, size), 0.0));
+        }
         let n = grid.n;
         let cells = (n as u64).pow(3);
         let gv_cells = (n as u64 + 1).pow(3);
@@ -719,7 +765,8 @@ impl Lpv {
         let cascades = (0..count)
             .map(|_| {
                 let lpv_atomic = storage("lpv atomics", cells * CELL_BYTES, none);
-                let gv_atomic = storage("gv atomics", gv_cells * 16, none);
+                // Blockers from the lights, then from the camera.
+                let gv_atomic = storage("gv atomics", 2 * gv_cells * 16, none);
                 let buffers = [
                     storage("lpv a", cells * CELL_BYTES, read),
                     storage("lpv b", cells * CELL_BYTES, read),

@@ -796,8 +796,8 @@ impl Renderer {
         let gscene = GpuScene::with_lightmap_uvs(device, &ctx.queue, scene, lm_rects.as_deref());
         let lpv_res = lpv
             .map(|(l, _)| {
-                let forward = camera.transform.transform_vector3(-Vec3::Z);
-                crate::lpv::Lpv::new(ctx, scene, l.clone(), camera.position(), forward, &s.wind)
+                let aspect = s.width as f32 / s.height as f32;
+                crate::lpv::Lpv::new(ctx, scene, l.clone(), &camera, aspect, &s.wind)
             })
             .transpose()
             .map_err(RasterError::Settings)?;

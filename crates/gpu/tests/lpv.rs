@@ -114,6 +114,8 @@ fn gpu_volume_matches_the_cpu_reference_on_cornell_and_room_cascades() {
             iterations: Some(8),
             occlusion,
             cascades,
+            // The CPU reference here models the light's RSM only.
+            camera_blockers: false,
             ..Default::default()
         };
         let r = render_lpv(&ctx, &scene, &s);
@@ -423,4 +425,48 @@ fn a_point_light_in_a_closed_box_injects_all_its_reflected_flux() {
         ((flux - Vec3::splat(want)) / want).abs().max_element() < 0.01,
         "{flux} vs {want}"
     );
+}
+
+#[test]
+fn camera_blockers_stop_light_that_no_light_sees_the_blocker_of() {
+    // Cornell's ceiling is behind its lamp: the lamp's RSM has no blocker there and light leaks
+    // out of the box through it. The camera sees the ceiling: with its blockers the light above
+    // the box drops.
+    let Some(ctx) = test_context() else { return };
+    let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
+    let top = scene.bounds().unwrap().1.y;
+    let above = |camera_blockers| {
+        let s = LpvSettings {
+            grid: 16,
+            rsm_size: 128,
+            iterations: Some(8),
+            camera_blockers,
+            ..Default::default()
+        };
+        let r = render_lpv(&ctx, &scene, &s);
+        assert_eq!(r.lpv().unwrap().light_count(), 1 + camera_blockers as usize);
+        let v = r.lpv().unwrap().read_volume(&ctx, 0).unwrap();
+        let mut out = 0.0;
+        let mut inside = 0.0;
+        for c in v.grid.cells() {
+            let f = v.at(c)[0][0];
+            if v.grid.centre(c).y > top + 0.5 * v.grid.cell {
+                out += f;
+            } else {
+                inside += f;
+            }
+        }
+        (out, inside)
+    };
+    let (leak, inside) = above(false);
+    let (blocked, inside_b) = above(true);
+    eprintln!(
+        "light above cornell's ceiling: {:.3} % of the inside without camera blockers, {:.3} % \
+         with",
+        100.0 * leak / inside,
+        100.0 * blocked / inside_b
+    );
+    assert!(blocked < 0.5 * leak, "{blocked} vs {leak}");
+    // The light inside is not blocked more than a few percent by the extra blockers.
+    assert!(inside_b > 0.8 * inside, "{inside_b} vs {inside}");
 }

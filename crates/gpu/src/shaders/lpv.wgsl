@@ -46,7 +46,8 @@ struct LpvUniforms {
 struct RsmLight {
     view_proj: mat4x4<f32>,
     eye: vec3<f32>,
-    // 0 directional (orthographic), 1 spot, 2 emissive area (perspective from its centre).
+    // 0 directional (orthographic), 1 spot, 2 emissive area (perspective from its centre),
+    // 3 the camera (perspective; no light, its surfels only block).
     kind: u32,
     // The direction the light travels (directional) or the view axis.
     axis: vec3<f32>,
@@ -199,8 +200,15 @@ fn inject_cs(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let nrm = textureLoad(rsm_normal, t, 0);
-    let flux = textureLoad(rsm_flux, t, 0).rgb;
     let n = normalize(nrm.xyz);
+    if light.kind == 3u {
+        // The camera's surfels: blockers of their own half of the geometry atomics.
+        if lpv.occlusion == 1u {
+            inject_blocker(pos.xyz, n, pos.w);
+        }
+        return;
+    }
+    let flux = textureLoad(rsm_flux, t, 0).rgb;
     let tr = clamp(nrm.w, 0.0, 1.0);
     inject_vpl(pos.xyz, n, flux * (1.0 - tr));
     if tr > 0.0 {
@@ -225,7 +233,8 @@ fn inject_blocker(p: vec3<f32>, n: vec3<f32>, area_perp: f32) {
         return;
     }
     let q = vec4<i32>(round(cosine_lobe(n) * (BLOCKER_SCALE * area / (lpv.cell * lpv.cell)) * lpv.gv_scale));
-    let base = cell_index(c, gn) * 4;
+    // Light views fill the first half of the atomics, the camera the second.
+    let base = cell_index(c, gn) * 4 + select(0, gn * gn * gn * 4, light.kind == 3u);
     atomicAdd(&gv_atomic[base + 0], q.x);
     atomicAdd(&gv_atomic[base + 1], q.y);
     atomicAdd(&gv_atomic[base + 2], q.z);
@@ -239,12 +248,22 @@ fn resolve_cs(@builtin(global_invocation_id) id: vec3<u32>) {
     if all(id < vec3<u32>(gn)) {
         let gi = i32((id.z * gn + id.y) * gn + id.x);
         let b = gi * 4;
-        gv[gi] = vec4<f32>(
+        let from_lights = vec4<f32>(
             f32(atomicLoad(&gv_atomic[b])),
             f32(atomicLoad(&gv_atomic[b + 1])),
             f32(atomicLoad(&gv_atomic[b + 2])),
             f32(atomicLoad(&gv_atomic[b + 3])),
         ) / lpv.gv_scale;
+        let c = b + i32(gn * gn * gn * 4u);
+        let from_camera = vec4<f32>(
+            f32(atomicLoad(&gv_atomic[c])),
+            f32(atomicLoad(&gv_atomic[c + 1])),
+            f32(atomicLoad(&gv_atomic[c + 2])),
+            f32(atomicLoad(&gv_atomic[c + 3])),
+        ) / lpv.gv_scale;
+        // A surface seen by a light and by the camera is one blocker, not two: per cell, the
+        // source with more blocking area.
+        gv[gi] = select(from_lights, from_camera, from_camera.x > from_lights.x);
     }
     if any(id >= vec3<u32>(lpv.n)) {
         return;
