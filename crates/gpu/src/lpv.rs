@@ -236,6 +236,21 @@ pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)>
     let far_from = |eye: Vec3| (eye - centre).length() + radius;
     for l in &scene.lights {
         let colour = l.color * l.intensity;
+        // A square perspective view of half-angle `half` from `eye` along `d` (kind 1).
+        let spot_view = |eye: Vec3, d: Vec3, half: f32| {
+            let far = far_from(eye).max(1e-3);
+            let view = look_to_mat4(eye, d, up_for(d));
+            let proj = directx::perspective(2.0 * half, 1.0, far * 1e-4, far);
+            RsmLight {
+                view_proj: (proj * view).to_cols_array_2d(),
+                eye: eye.to_array(),
+                kind: 1,
+                axis: d.to_array(),
+                texel: (2.0 * half.tan() / size as f32).powi(2),
+                color: colour.to_array(),
+                ..Default::default()
+            }
+        };
         match l.kind {
             LightKind::Directional { .. } => {
                 let d = l.direction.normalize();
@@ -263,21 +278,11 @@ pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)>
             } => {
                 let d = l.direction.normalize();
                 let half = outer_cone.clamp(0.01, 1.48);
-                let far = far_from(l.position).max(1e-3);
-                let view = look_to_mat4(l.position, d, up_for(d));
-                let proj = directx::perspective(2.0 * half, 1.0, far * 1e-4, far);
-                let texel = (2.0 * half.tan() / size as f32).powi(2);
                 out.push((
                     RsmLight {
-                        view_proj: (proj * view).to_cols_array_2d(),
-                        eye: l.position.to_array(),
-                        kind: 1,
-                        axis: d.to_array(),
-                        texel,
-                        color: colour.to_array(),
                         cos_inner: inner_cone.cos(),
                         cos_outer: outer_cone.cos(),
-                        ..Default::default()
+                        ..spot_view(l.position, d, half)
                     },
                     colour.max_element() * 2.0 * std::f32::consts::PI * (1.0 - half.cos()),
                 ));
@@ -285,23 +290,13 @@ pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)>
             LightKind::Point => {
                 // Six 90° faces of a cube around the light, each a spot light without falloff
                 // (cos_outer = −1 keeps the spot factor at 1 over the face).
-                let far = far_from(l.position).max(1e-3);
                 let half = std::f32::consts::FRAC_PI_4;
-                let texel = (2.0 * half.tan() / size as f32).powi(2);
                 for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
-                    let view = look_to_mat4(l.position, d, up_for(d));
-                    let proj = directx::perspective(2.0 * half, 1.0, far * 1e-4, far);
                     out.push((
                         RsmLight {
-                            view_proj: (proj * view).to_cols_array_2d(),
-                            eye: l.position.to_array(),
-                            kind: 1,
-                            axis: d.to_array(),
-                            texel,
-                            color: colour.to_array(),
                             cos_inner: 0.0,
                             cos_outer: -1.0,
-                            ..Default::default()
+                            ..spot_view(l.position, d, half)
                         },
                         // Each face holds at most a sixth of 4π·I (its solid angle is 4π/6).
                         colour.max_element() * 4.0 * std::f32::consts::PI / 6.0,
