@@ -8,7 +8,9 @@
 //! lightlab additions live in `extras` so other tools ignore them harmlessly:
 //! - a directional light's `extras.angularDiameter` (radians);
 //! - the scene's `extras.lightlab.environment = { uri, intensity }`, an equirectangular EXR/HDR
-//!   next to the glTF file (glTF has no ratified equirectangular environment extension).
+//!   next to the glTF file (glTF has no ratified equirectangular environment extension);
+//! - a decimated mesh's `extras.lightlab.detailSource` = the index of the glTF mesh it was
+//!   simplified from (loaded even when no node shows it), for detail baking.
 //!
 //! Export writes one binary blob (GLB chunk, or `<stem>.bin` beside a `.gltf`) holding all
 //! geometry and the textures as PNG, plus `<stem>.env.exr` when the scene has an environment.
@@ -123,6 +125,56 @@ fn extras_json(extras: &gltf::json::Extras) -> Option<Value> {
 }
 
 impl Importer<'_> {
+    /// Mesh `extras.lightlab.detailSource` = the index of the glTF mesh it was decimated from;
+    /// that mesh (its first primitive) is loaded even when no node shows it.
+    fn detail_sources(&mut self, default_material: usize) -> Result<(), SceneError> {
+        let mut loaded: Vec<((usize, usize), usize)> =
+            self.mesh_map.iter().map(|(k, v)| (*k, *v)).collect();
+        loaded.sort();
+        for ((mi, _), id) in loaded {
+            let Some(gmesh) = self.doc.meshes().nth(mi) else {
+                continue;
+            };
+            let Some(src) = extras_json(gmesh.extras())
+                .and_then(|v| v.get("lightlab")?.get("detailSource")?.as_u64())
+            else {
+                continue;
+            };
+            let bad = |problem: String| SceneError::Content {
+                path: self.path.into(),
+                what: format!("mesh {mi}"),
+                problem,
+            };
+            let src_mesh = self
+                .doc
+                .meshes()
+                .nth(src as usize)
+                .filter(|_| src as usize != mi)
+                .ok_or_else(|| {
+                    bad(format!(
+                        "extras.lightlab.detailSource {src} is not another mesh"
+                    ))
+                })?;
+            let key = (src_mesh.index(), 0);
+            let sid = match self.mesh_map.get(&key) {
+                Some(&s) => s,
+                None => {
+                    let prim = src_mesh
+                        .primitives()
+                        .next()
+                        .ok_or_else(|| bad(format!("detail source mesh {src} has no primitive")))?;
+                    let m = self.primitive(&src_mesh, &prim, default_material)?;
+                    self.scene.meshes.push(m);
+                    let s = self.scene.meshes.len() - 1;
+                    self.mesh_map.insert(key, s);
+                    s
+                }
+            };
+            self.scene.meshes[id].detail_source = Some(sid);
+        }
+        Ok(())
+    }
+
     fn run(mut self) -> Result<Scene, SceneError> {
         for m in self.doc.materials() {
             let mat = self.material(&m)?;
@@ -138,6 +190,7 @@ impl Importer<'_> {
         for node in gscene.nodes() {
             self.node(&node, Mat4::IDENTITY, default_material)?;
         }
+        self.detail_sources(default_material)?;
         if self
             .scene
             .meshes
@@ -459,6 +512,7 @@ impl Importer<'_> {
             uv1,
             indices,
             material: prim.material().index().unwrap_or(default_material),
+            detail_source: None,
         })
     }
 }
@@ -767,10 +821,15 @@ impl Writer {
                 "bufferView": view, "componentType": 5125, "count": m.indices.len(), "type": "SCALAR"
             }));
             let indices = self.accessors.len() - 1;
-            meshes.push(json!({
+            let mut mesh = json!({
                 "name": m.name,
                 "primitives": [{ "attributes": attrs, "indices": indices, "material": m.material, "mode": 4 }]
-            }));
+            });
+            if let Some(d) = m.detail_source {
+                // glTF mesh i is scene mesh i.
+                mesh["extras"] = json!({ "lightlab": { "detailSource": d } });
+            }
+            meshes.push(mesh);
         }
         let mut nodes = vec![];
         for (i, inst) in scene.instances.iter().enumerate() {

@@ -9,6 +9,7 @@
 pub mod builtin;
 pub mod gltf_io;
 pub mod model;
+pub mod simplify;
 pub mod validate;
 
 pub use model::*;

@@ -35,6 +35,10 @@ pub struct Mesh {
     pub uv1: Option<Vec<Vec2>>,
     pub indices: Vec<u32>,
     pub material: usize,
+    /// The high-poly mesh (index in the scene's meshes) this one was decimated from: bakers
+    /// project its texels onto that surface and take normals and occlusion from it (McKenzie
+    /// Chapter 2010 §4.2.4). glTF: mesh `extras.lightlab.detailSource` = the source mesh's name.
+    pub detail_source: Option<usize>,
 }
 
 impl Mesh {

@@ -66,9 +66,16 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
             ));
         }
     }
-    for mesh in &mut scene.meshes {
+    let nmesh = scene.meshes.len();
+    for (k, mesh) in scene.meshes.iter_mut().enumerate() {
         let n = mesh.positions.len();
         let name = mesh.name.clone();
+        if mesh.detail_source.is_some_and(|d| d >= nmesh || d == k) {
+            return Err(geo(
+                &name,
+                "its detail source is itself or a mesh that does not exist".into(),
+            ));
+        }
         if mesh.indices.len() % 3 != 0 {
             return Err(geo(
                 &name,

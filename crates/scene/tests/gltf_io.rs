@@ -42,7 +42,21 @@ fn assert_same_scene(a: &Scene, b: &Scene) {
         assert_eq!(x.sway, y.sway);
         assert_eq!(x.brdf, y.brdf);
         assert_eq!(x.base_color_texture, y.base_color_texture);
+        assert_eq!(x.normal_texture, y.normal_texture);
     }
+    // Decimated meshes name their high-poly source (by mesh name: indices may differ).
+    let detail = |s: &Scene| -> Vec<(String, Option<String>)> {
+        s.meshes
+            .iter()
+            .map(|m| {
+                (
+                    m.name.clone(),
+                    m.detail_source.map(|d| s.meshes[d].name.clone()),
+                )
+            })
+            .collect()
+    };
+    assert_eq!(detail(a), detail(b), "{}: detail sources", a.name);
     assert_eq!(a.textures.len(), b.textures.len());
     for (x, y) in a.textures.iter().zip(&b.textures) {
         assert_eq!((x.width, x.height), (y.width, y.height));
@@ -124,6 +138,18 @@ fn builtin_scenes_have_cameras_and_the_specified_sizes() {
     let prt = builtin::builtin("prt").unwrap();
     let high = prt.meshes.iter().find(|m| m.name == "knot_high").unwrap();
     assert!((50_000..=200_000).contains(&high.triangle_count()));
+    // The decimated knot: meshopt's simplification to ≈2 % that names the high-poly knot.
+    let low = prt.meshes.iter().find(|m| m.name == "knot_low").unwrap();
+    assert!(
+        (1_000..=2_500).contains(&low.triangle_count()),
+        "{}",
+        low.triangle_count()
+    );
+    assert_eq!(
+        low.detail_source.map(|d| prt.meshes[d].name.as_str()),
+        Some("knot_high")
+    );
+    assert!(prt.materials.iter().any(|m| m.normal_texture.is_some()));
     let cornell = builtin::builtin("cornell").unwrap();
     assert!(cornell.materials.iter().any(|m| m.is_emissive()));
 }

@@ -21,6 +21,7 @@ pub fn quad(name: &str, p: [Vec3; 4], material: usize) -> Mesh {
         uv1: None,
         indices: vec![0, 1, 2, 0, 2, 3],
         material,
+        detail_source: None,
     }
 }
 

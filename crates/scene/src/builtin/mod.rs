@@ -448,9 +448,9 @@ fn shadows() -> Scene {
     s
 }
 
-/// A procedural 64×64 leaf texture (linear RGBA): a pointed ellipse with a midrib; alpha 0
-/// outside the leaf for alpha testing.
-fn leaf_texture() -> Texture {
+/// A 64×64 leaf texture: per texel whether it lies inside the leaf (a pointed ellipse), on the
+/// midrib or on a vein, mapped to a texel by `texel`.
+fn leaf_map(texel: impl Fn(bool, bool, bool) -> Vec4) -> Vec<Vec4> {
     let n = 64u32;
     let mut data = Vec::with_capacity((n * n) as usize);
     for y in 0..n {
@@ -461,20 +461,29 @@ fn leaf_texture() -> Texture {
             let inside = s.abs() < half_width;
             let rib = s.abs() < 0.03;
             let vein = ((t * 14.0 - s.abs() * 10.0).fract() - 0.5).abs() < 0.06;
-            let c = if rib {
-                Vec3::new(0.22, 0.38, 0.08)
-            } else if vein {
-                Vec3::new(0.16, 0.34, 0.07)
-            } else {
-                Vec3::new(0.10, 0.30, 0.05)
-            };
-            data.push(c.extend(if inside { 1.0 } else { 0.0 }));
+            data.push(texel(inside, rib, vein));
         }
     }
+    data
+}
+
+/// A procedural 64×64 leaf texture (linear RGBA): a pointed ellipse with a midrib; alpha 0
+/// outside the leaf for alpha testing.
+fn leaf_texture() -> Texture {
+    let data = leaf_map(|inside, rib, vein| {
+        let c = if rib {
+            Vec3::new(0.22, 0.38, 0.08)
+        } else if vein {
+            Vec3::new(0.16, 0.34, 0.07)
+        } else {
+            Vec3::new(0.10, 0.30, 0.05)
+        };
+        c.extend(if inside { 1.0 } else { 0.0 })
+    });
     Texture {
         name: "leaf".into(),
-        width: n,
-        height: n,
+        width: 64,
+        height: 64,
         data,
         srgb: true,
     }
@@ -483,28 +492,20 @@ fn leaf_texture() -> Texture {
 /// The leaf's translucency map (linear; alpha scales the diffuse transmission): the thin lamina
 /// lets light through, the veins less and the midrib least, as in the WPI report's leaves.
 fn leaf_translucency() -> Texture {
-    let n = 64u32;
-    let mut data = Vec::with_capacity((n * n) as usize);
-    for y in 0..n {
-        for x in 0..n {
-            let s = (x as f32 + 0.5) / n as f32 - 0.5;
-            let t = (y as f32 + 0.5) / n as f32;
-            let rib = s.abs() < 0.03;
-            let vein = ((t * 14.0 - s.abs() * 10.0).fract() - 0.5).abs() < 0.06;
-            let a = if rib {
-                0.25
-            } else if vein {
-                0.6
-            } else {
-                1.0
-            };
-            data.push(Vec4::new(1.0, 1.0, 1.0, a));
-        }
-    }
+    let data = leaf_map(|_, rib, vein| {
+        let a = if rib {
+            0.25
+        } else if vein {
+            0.6
+        } else {
+            1.0
+        };
+        Vec4::new(1.0, 1.0, 1.0, a)
+    });
     Texture {
         name: "leaf_translucency".into(),
-        width: n,
-        height: n,
+        width: 64,
+        height: 64,
         data,
         srgb: false,
     }
@@ -649,34 +650,93 @@ fn bush() -> Scene {
     s
 }
 
-/// The PRT scene: a ridged (2,3) torus knot of ≈86k triangles and a coarse 4.8k-triangle
-/// copy of its tube beside it, on a plane, under a low-frequency environment.
+/// Dune-map repeats per metre on the `prt` ground.
+const DUNE_TILES_PER_METRE: f32 = 0.5;
+
+/// A 256² tangent-space normal map of wind-blown sand (linear; xyz·½ + ½): asymmetric ripples
+/// crossing two dune ridges, periodic in the tile, slopes up to ≈30° — the ground of the `prt`
+/// scene, for normal-mapped SH light-maps (Fuchs §5.7 shows sand dunes).
+fn dune_normal_map() -> Texture {
+    use std::f32::consts::TAU;
+    let n = 256u32;
+    // Height in tile units (one tile = 1/DUNE_TILES_PER_METRE metres).
+    let height = |u: f32, v: f32| {
+        let ridge = (TAU * (u + 0.15 * (TAU * v).sin())).sin();
+        let ripple_phase = TAU * (6.0 * u + v + 0.3 * (TAU * 2.0 * v).sin());
+        // Ripples steeper on their lee side: sin + a second harmonic.
+        let ripple = ripple_phase.sin() + 0.35 * (2.0 * ripple_phase).sin();
+        0.045 * ridge + 0.007 * ripple
+    };
+    let e = 0.5 / n as f32;
+    let data = (0..n * n)
+        .map(|k| {
+            let (x, y) = (k % n, k / n);
+            let (u, v) = ((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
+            let du = (height(u + e, v) - height(u - e, v)) / (2.0 * e);
+            let dv = (height(u, v + e) - height(u, v - e)) / (2.0 * e);
+            let nrm = Vec3::new(-du, -dv, 1.0).normalize();
+            (nrm * 0.5 + Vec3::splat(0.5)).extend(1.0)
+        })
+        .collect();
+    Texture {
+        name: "dunes_normal".into(),
+        width: n,
+        height: n,
+        data,
+        srgb: false,
+    }
+}
+
+/// How the `prt` scene's decimated knot is made from the high-poly one.
+pub const KNOT_DECIMATION: crate::simplify::SimplifySettings = crate::simplify::SimplifySettings {
+    target_triangles: 2000,
+    max_error: 0.05,
+    weld: 1e-5,
+};
+
+/// The PRT scene: a ridged (2,3) torus knot of ≈86k triangles and a meshopt decimation of it
+/// beside it, on a plane, under a low-frequency environment.
 fn prt() -> Scene {
     let mut s = Scene::default();
-    let plane = s.add_material(Material::diffuse("plane", Vec3::splat(0.6)));
+    s.textures.push(dune_normal_map());
+    let mut ground = Material::diffuse("plane", Vec3::splat(0.6));
+    ground.normal_texture = Some(TextureRef {
+        texture: 0,
+        uv_set: 0,
+    });
+    let plane = s.add_material(ground);
     let body = s.add_material(Material::diffuse("knot", Vec3::new(0.75, 0.72, 0.68)));
-    s.add_mesh(
-        quad(
-            "plane",
-            [
-                Vec3::new(-4.0, 0.0, 4.0),
-                Vec3::new(4.0, 0.0, 4.0),
-                Vec3::new(4.0, 0.0, -4.0),
-                Vec3::new(-4.0, 0.0, -4.0),
-            ],
-            plane,
-        ),
-        Mat4::IDENTITY,
+    let mut ground_mesh = quad(
+        "plane",
+        [
+            Vec3::new(-4.0, 0.0, 4.0),
+            Vec3::new(4.0, 0.0, 4.0),
+            Vec3::new(4.0, 0.0, -4.0),
+            Vec3::new(-4.0, 0.0, -4.0),
+        ],
+        plane,
     );
+    // UV0 in metres: the dune map tiles every 2 m.
+    ground_mesh
+        .uv0
+        .iter_mut()
+        .for_each(|uv| *uv *= DUNE_TILES_PER_METRE);
+    ground_mesh.compute_tangents();
+    s.add_mesh(ground_mesh, Mat4::IDENTITY);
+    let high = ridged_torus_knot("knot_high", 2.0, 3.0, 1.0, 0.22, 7.0, 0.35, 900, 48, body);
+    let high_id = s.meshes.len();
+    // The decimated copy: meshoptimizer's simplification of the high-poly knot to ≈2% of its
+    // triangles (the ridges mostly collapse into the tube); it names the high-poly knot as its
+    // detail source, so textured PRT bakes the ridges' normals and occlusion onto it.
+    let low = crate::simplify::simplify(&high, high_id, &KNOT_DECIMATION)
+        .expect("the built-in knot simplifies")
+        .mesh;
+    s.add_mesh(high, Mat4::from_translation(Vec3::new(-1.3, 0.72, 0.0)));
     s.add_mesh(
-        ridged_torus_knot("knot_high", 2.0, 3.0, 1.0, 0.22, 7.0, 0.35, 900, 48, body),
-        Mat4::from_translation(Vec3::new(-1.3, 0.72, 0.0)),
-    );
-    // The coarse copy: the knot's tube without its ridges (what a decimation converges to; 12
-    // samples around the tube cannot carry 7 ridges without aliasing). Issue 6 replaces it with
-    // a meshopt simplification of the high-poly mesh.
-    s.add_mesh(
-        ridged_torus_knot("knot_low", 2.0, 3.0, 1.0, 0.22, 7.0, 0.0, 200, 12, body),
+        Mesh {
+            name: "knot_low".into(),
+            ..low
+        },
         Mat4::from_translation(Vec3::new(1.3, 0.72, 0.0)),
     );
     s.environment = Some(sky_env(
