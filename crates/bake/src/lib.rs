@@ -10,6 +10,8 @@
 //! surface is albedo × light-map, plus its emission.
 #![forbid(unsafe_code)]
 
+pub mod cashl;
+pub mod detail;
 pub mod gather;
 pub mod layout;
 pub mod output;

@@ -160,14 +160,19 @@ pub fn write(
 pub(crate) fn write_manifest<T: Serialize>(dir: &Path, manifest: &T) -> Result<(), BakeError> {
     let path = dir.join(MANIFEST);
     let json = serde_json::to_string_pretty(manifest).map_err(|e| io(&path, e))?;
-    write_atomic(&path, |mut f| {
-        f.write_all(json.as_bytes())
+    write_bytes(&path, json.as_bytes())
+}
+
+/// Write `bytes` to `path` atomically (temporary file, then rename).
+pub(crate) fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), BakeError> {
+    write_atomic(path, |mut f| {
+        f.write_all(bytes)
             .map_err(|e| lightlab_core::image::ImageError::Io {
-                path: path.clone(),
+                path: path.into(),
                 source: e,
             })
     })
-    .map_err(|e| io(&path, e))
+    .map_err(|e| io(path, e))
 }
 
 /// The glTF file of a bake.
@@ -222,6 +227,9 @@ fn write_gltf(
             }
         }
     }
+    // Mesh indices changed above; the light-maps already carry the detail of any high-poly
+    // source, so the exported meshes name none.
+    meshes.iter_mut().for_each(|m| m.detail_source = None);
     scene.meshes = meshes;
     for name in png_pages {
         let p = dir.join(name);

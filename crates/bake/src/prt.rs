@@ -34,14 +34,17 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Which transfer to compute.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum TransferKind {
     /// Clamped cosine only (no visibility).
     Unshadowed,
     /// Clamped cosine × visibility.
     Shadowed,
-    /// Shadowed plus this many bounces of diffuse inter-reflection.
+    /// Shadowed plus this many bounces of diffuse inter-reflection, gathered (Sloan et al.).
     Interreflected { bounces: u32 },
+    /// Shadowed plus inter-reflection shot between light-map texels to convergence (CaSHL,
+    /// [`crate::cashl`]); SH light-maps only.
+    Shooting(crate::cashl::ShootSettings),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -52,6 +55,15 @@ pub struct TransferSettings {
     pub samples: u32,
     pub kind: TransferKind,
     pub seed: u64,
+    /// Texels of decimated meshes (those naming a `detail_source`) take position, normal and
+    /// occlusion from the source surface (`crate::detail`); None bakes the decimated surface as
+    /// it is. No effect on scenes without decimated meshes.
+    #[serde(default)]
+    pub detail: Option<crate::detail::DetailSettings>,
+    /// Texel normals from the materials' normal maps, averaged over each texel (Fuchs §5.7,
+    /// `texels::normal_mapped_normal`): the transfer of `shl-normalmapped`.
+    #[serde(default)]
+    pub normal_mapped: bool,
 }
 
 impl Default for TransferSettings {
@@ -61,6 +73,8 @@ impl Default for TransferSettings {
             samples: 1024,
             kind: TransferKind::Shadowed,
             seed: 0,
+            detail: Some(crate::detail::DetailSettings::default()),
+            normal_mapped: false,
         }
     }
 }
@@ -207,6 +221,7 @@ fn gather_point(
     accel: &Accel,
     p: Vec3,
     n: Vec3,
+    ng: Vec3,
     s: &TransferSettings,
     point: u64,
     previous: Option<&VertexTransfer>,
@@ -223,6 +238,11 @@ fn gather_point(
     for k in 0..s.samples {
         let u = (hammersley(k, s.samples) + rot).fract_gl();
         let d = frame.to_world(cosine_hemisphere(u));
+        // Fuchs §5.7's second cosine test: a direction below the surface's geometric plane
+        // carries nothing, whatever the (normal-mapped or interpolated) normal says.
+        if d.dot(ng) <= 0.0 {
+            continue;
+        }
         match previous {
             None => {
                 if !accel.occluded(o, d, f32::INFINITY) {
@@ -268,6 +288,21 @@ pub fn point_transfer(
     s: &TransferSettings,
     bounces: &[VertexTransfer],
 ) -> Result<Vec<f32>, TransferError> {
+    let pts: Vec<(Vec3, Vec3, Vec3)> = points.iter().map(|&(p, n)| (p, n, n)).collect();
+    surface_transfer(scene, accel, &pts, s, bounces)
+}
+
+/// [`point_transfer`] of points (position, shading normal, geometric normal) whose shading
+/// normal may differ from the surface's (normal maps, interpolated normals): directions below
+/// the geometric plane count as blocked (Fuchs §5.7's two cosine tests). Unshadowed transfer
+/// stays the exact clamped cosine about the shading normal.
+pub fn surface_transfer(
+    scene: &Scene,
+    accel: &Accel,
+    points: &[(Vec3, Vec3, Vec3)],
+    s: &TransferSettings,
+    bounces: &[VertexTransfer],
+) -> Result<Vec<f32>, TransferError> {
     check(s)?;
     let nc = sh::num_coeffs(s.bands);
     let zonal = sh::clamped_cosine_zonal(s.bands);
@@ -275,7 +310,7 @@ pub fn point_transfer(
     out.par_chunks_mut(nc)
         .zip(points.par_iter())
         .enumerate()
-        .for_each(|(k, (o, &(p, n)))| {
+        .for_each(|(k, (o, &(p, n, ng)))| {
             if s.kind == TransferKind::Unshadowed {
                 let c = sh::zonal_to_axis(&zonal, n.as_dvec3());
                 for (a, b) in o.iter_mut().zip(c) {
@@ -283,10 +318,10 @@ pub fn point_transfer(
                 }
                 return;
             }
-            gather_point(scene, accel, p, n, s, k as u64, None, o);
+            gather_point(scene, accel, p, n, ng, s, k as u64, None, o);
             let mut add = vec![0.0f32; nc];
             for prev in bounces {
-                gather_point(scene, accel, p, n, s, k as u64, Some(prev), &mut add);
+                gather_point(scene, accel, p, n, ng, s, k as u64, Some(prev), &mut add);
                 for (a, b) in o.iter_mut().zip(&add) {
                     *a += b;
                 }
@@ -304,6 +339,13 @@ pub fn vertex_transfer(
     s: &TransferSettings,
 ) -> Result<(VertexTransfer, Vec<VertexTransfer>), TransferError> {
     check(s)?;
+    if matches!(s.kind, TransferKind::Shooting(_)) {
+        return Err(TransferError::Settings(
+            "shooting (CaSHL) runs between light-map texels; per-vertex transfer gathers its \
+             bounces (use interreflected)"
+                .into(),
+        ));
+    }
     let verts = world_vertices(scene);
     let flat: Vec<(Vec3, Vec3)> = verts.iter().flatten().copied().collect();
     let nc = sh::num_coeffs(s.bands);
@@ -337,7 +379,7 @@ pub fn vertex_transfer(
                 .zip(flat.par_iter())
                 .enumerate()
                 .for_each(|(k, (o, &(p, n)))| {
-                    gather_point(scene, accel, p, n, s, k as u64, Some(&prev), o)
+                    gather_point(scene, accel, p, n, n, s, k as u64, Some(&prev), o)
                 });
             for (a, b) in total.iter_mut().zip(&inc) {
                 *a += b;
@@ -347,6 +389,9 @@ pub fn vertex_transfer(
     }
     Ok((split(total), increments))
 }
+
+/// Normal-map samples averaged per texel for normal-mapped transfer (Fuchs's CaSHL: 20).
+pub const NORMAL_MAP_SAMPLES: u32 = 20;
 
 /// Transfer per light-map texel (Fuchs §5's SH light-maps, the texels of CaSHL): the scene's
 /// light-map layout, and per page the coefficients packed three to an RGB image
@@ -359,6 +404,10 @@ pub struct ShLightmaps {
     pub bands: usize,
     pub pages: Vec<Vec<lightlab_core::image::Image>>,
     pub settings: TransferSettings,
+    /// Texels projected onto detail sources (None: no detail baked).
+    pub detail: Option<crate::detail::DetailStats>,
+    /// What CaSHL's shooting did (None: no shooting).
+    pub shooting: Option<crate::cashl::ShootStats>,
 }
 
 impl ShLightmaps {
@@ -401,8 +450,22 @@ pub fn bake_sh_lightmaps(
     if !progress("vertex transfer", 0, 1) {
         return Err(crate::BakeError::Cancelled);
     }
+    // With detail, transfer is computed on the source surfaces, against the scene as the
+    // source meshes have it (inter-reflection too); texels keep the decimated layout.
+    let detail = s
+        .detail
+        .filter(|_| crate::detail::has_detail(&scene))
+        .map(|d| {
+            let ds = crate::detail::detail_scene(&scene);
+            let da = Accel::new(&ds);
+            (crate::detail::DetailProjector::new(&scene, &d), ds, da)
+        });
+    let (tscene, taccel) = match &detail {
+        Some((_, ds, da)) => (ds, da),
+        None => (&scene, &accel),
+    };
     let sources = if matches!(s.kind, TransferKind::Interreflected { .. }) {
-        vertex_transfer(&scene, &accel, s)?.1
+        vertex_transfer(tscene, taccel, s)?.1
     } else {
         vec![]
     };
@@ -410,6 +473,18 @@ pub fn bake_sh_lightmaps(
     let nc = sh::num_coeffs(s.bands);
     let images = nc.div_ceil(3);
     let mut pages = vec![];
+    let mut detail_stats = detail
+        .as_ref()
+        .map(|_| crate::detail::DetailStats::default());
+    // Shooting starts from the shadowed transfer of every texel.
+    let direct_s = match s.kind {
+        TransferKind::Shooting(_) => TransferSettings {
+            kind: TransferKind::Shadowed,
+            ..*s
+        },
+        _ => *s,
+    };
+    let mut computed = vec![];
     for (k, (page, ok)) in texels.pages.iter().zip(&valid).enumerate() {
         if !progress("texel transfer", k, total_pages) {
             return Err(crate::BakeError::Cancelled);
@@ -417,14 +492,91 @@ pub fn bake_sh_lightmaps(
         let idx: Vec<usize> = (0..page.samples.len())
             .filter(|&i| page.samples[i].is_some() && ok[i])
             .collect();
-        let pts: Vec<(Vec3, Vec3)> = idx
+        let surface: Vec<(usize, crate::detail::SurfacePoint)> = idx
             .iter()
             .map(|&i| {
                 let t = page.samples[i].as_ref().expect("filtered");
-                (t.p + t.ng * ray_eps(t.p), t.ns)
+                let ns = if s.normal_mapped {
+                    let mut rng = Rng::new(s.seed ^ 0x6e6d, ((k as u64) << 32) | i as u64);
+                    crate::texels::normal_mapped_normal(&scene, t, NORMAL_MAP_SAMPLES, &mut rng)
+                        .unwrap_or(t.ns)
+                } else {
+                    t.ns
+                };
+                let sp = crate::detail::SurfacePoint {
+                    p: t.p,
+                    ng: t.ng,
+                    ns,
+                };
+                (t.instance as usize, sp)
             })
             .collect();
-        let tr = point_transfer(&scene, &accel, &pts, s, &sources)?;
+        let surface: Vec<crate::detail::SurfacePoint> = match &detail {
+            Some((proj, _, _)) => {
+                let (pts, st) = proj.project_all(&surface);
+                if let Some(acc) = detail_stats.as_mut() {
+                    acc.merge(&st);
+                }
+                pts
+            }
+            None => surface.into_iter().map(|(_, sp)| sp).collect(),
+        };
+        let pts: Vec<(Vec3, Vec3, Vec3)> = surface
+            .iter()
+            .map(|sp| (sp.p + sp.ng * ray_eps(sp.p), sp.ns, sp.ng))
+            .collect();
+        let tr = surface_transfer(tscene, taccel, &pts, &direct_s, &sources)?;
+        computed.push((idx, surface, tr));
+    }
+    progress("texel transfer", total_pages, total_pages);
+    let mut shoot_stats = None;
+    if let TransferKind::Shooting(shoot) = s.kind {
+        // CaSHL: the bounces by shooting between all texels of all pages.
+        let mut patches = vec![];
+        let mut transfer = vec![];
+        for (k, (idx, surface, tr)) in computed.iter().enumerate() {
+            let page = &texels.pages[k];
+            for (j, &i) in idx.iter().enumerate() {
+                let t = page.samples[i].as_ref().expect("filtered");
+                if t.area <= 0.0 {
+                    continue;
+                }
+                patches.push(crate::cashl::ShootPatch {
+                    p: surface[j].p,
+                    n: surface[j].ns,
+                    ng: surface[j].ng,
+                    area: t.area,
+                    rho: t.albedo.element_sum() / 3.0,
+                    page: k as u32,
+                    x: i as u32 % page.width,
+                    y: i as u32 / page.width,
+                    instance: t.instance,
+                });
+                transfer.extend_from_slice(&tr[j * nc..(j + 1) * nc]);
+            }
+        }
+        let np = patches.len();
+        let st = crate::cashl::shoot(taccel, &patches, &mut transfer, nc, &shoot, &|shots| {
+            progress("shooting", shots as usize, 0)
+        })
+        .map_err(|e| match e.as_str() {
+            "cancelled" => crate::BakeError::Cancelled,
+            _ => crate::BakeError::Settings(e),
+        })?;
+        debug_assert_eq!(np, st.patches);
+        shoot_stats = Some(st);
+        let mut it = transfer.chunks_exact(nc);
+        for (k, (idx, _, tr)) in computed.iter_mut().enumerate() {
+            let page = &texels.pages[k];
+            for (j, &i) in idx.iter().enumerate() {
+                if page.samples[i].as_ref().is_some_and(|t| t.area > 0.0) {
+                    tr[j * nc..(j + 1) * nc].copy_from_slice(it.next().expect("one per patch"));
+                }
+            }
+        }
+    }
+    for (k, (idx, _, tr)) in computed.iter().enumerate() {
+        let page = &texels.pages[k];
         let n = page.samples.len();
         let mut imgs = vec![];
         for k in 0..images {
@@ -452,6 +604,8 @@ pub fn bake_sh_lightmaps(
         bands: s.bands,
         pages,
         settings: *s,
+        detail: detail_stats,
+        shooting: shoot_stats,
     })
 }
 
@@ -490,6 +644,12 @@ pub struct ShManifest {
     /// Per page, its coefficient images: coefficient c is channel c%3 of image c/3.
     pub pages: Vec<Vec<String>>,
     pub seconds: f64,
+    /// What the detail projection did (absent: no detail baked).
+    #[serde(default)]
+    pub detail: Option<crate::detail::DetailStats>,
+    /// What CaSHL's shooting did (absent: no shooting).
+    #[serde(default)]
+    pub shooting: Option<crate::cashl::ShootStats>,
 }
 
 pub const SH_FORMAT: &str = "lightlab-sh-lightmaps";
@@ -531,6 +691,8 @@ pub fn write_sh(
         layout: sl.layout.clone(),
         pages,
         seconds,
+        detail: sl.detail,
+        shooting: sl.shooting,
     };
     crate::output::write_manifest(dir, &m)?;
     Ok(m)
@@ -587,7 +749,152 @@ pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crat
         bands: m.bands,
         pages,
         settings: m.transfer,
+        detail: m.detail,
+        shooting: m.shooting,
     })
+}
+
+/// The manifest of a baked per-vertex transfer folder (`lightlab bake --method prt`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VertexManifest {
+    pub format: String,
+    pub version: u32,
+    pub scene: String,
+    pub quantity: String,
+    pub bands: usize,
+    pub transfer: TransferSettings,
+    /// Per instance: its name, vertex count and file (`transfer-I.bin`: little-endian f32,
+    /// vertex-major, bands² coefficients per vertex, in the mesh's vertex order).
+    pub instances: Vec<VertexFile>,
+    pub seconds: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VertexFile {
+    pub name: String,
+    pub vertices: usize,
+    pub file: String,
+}
+
+pub const VERTEX_FORMAT: &str = "lightlab-vertex-transfer";
+
+/// Write per-vertex transfer to `dir`: one `transfer-I.bin` per instance and the manifest, last.
+pub fn write_vertex_transfer(
+    vt: &VertexTransfer,
+    scene: &Scene,
+    settings: &TransferSettings,
+    dir: &std::path::Path,
+    scene_name: &str,
+    seconds: f64,
+) -> Result<VertexManifest, crate::BakeError> {
+    std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
+    let nc = sh::num_coeffs(vt.bands);
+    let mut instances = vec![];
+    for (i, (inst, data)) in scene.instances.iter().zip(&vt.instances).enumerate() {
+        let file = format!("transfer-{i}.bin");
+        let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
+        crate::output::write_bytes(&dir.join(&file), &bytes)?;
+        instances.push(VertexFile {
+            name: inst.name.clone(),
+            vertices: data.len() / nc,
+            file,
+        });
+    }
+    let m = VertexManifest {
+        format: VERTEX_FORMAT.into(),
+        version: 1,
+        scene: scene_name.into(),
+        quantity:
+            "diffuse transfer per vertex t_i = (1/pi) int V max(n.w,0) Y_i dw: E/pi = sum l_i t_i"
+                .into(),
+        bands: vt.bands,
+        transfer: *settings,
+        instances,
+        seconds,
+    };
+    crate::output::write_manifest(dir, &m)?;
+    Ok(m)
+}
+
+/// Read a per-vertex transfer folder for `scene` (instance names and vertex counts must match).
+pub fn read_vertex_transfer(
+    dir: &std::path::Path,
+    scene: &Scene,
+) -> Result<(VertexTransfer, TransferSettings), crate::BakeError> {
+    let path = dir.join(crate::output::MANIFEST);
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        io_err(
+            &path,
+            format!("{e} (is this a folder written by `lightlab bake --method prt`?)"),
+        )
+    })?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
+    let format = v
+        .get("format")
+        .and_then(|f| f.as_str())
+        .unwrap_or("no format");
+    if format != VERTEX_FORMAT {
+        return Err(io_err(
+            &path,
+            format!(
+                "not a per-vertex transfer folder but '{format}' (bake one with `lightlab bake \
+                 --method prt`)"
+            ),
+        ));
+    }
+    let m: VertexManifest = serde_json::from_value(v).map_err(|e| io_err(&path, e))?;
+    if m.version != 1 || !(1..=8).contains(&m.bands) {
+        return Err(io_err(
+            &path,
+            format!(
+                "unsupported version {} or band count {}",
+                m.version, m.bands
+            ),
+        ));
+    }
+    let nc = sh::num_coeffs(m.bands);
+    let differs = m.instances.len() != scene.instances.len()
+        || m.instances.iter().zip(&scene.instances).any(|(f, inst)| {
+            f.name != inst.name || f.vertices != scene.meshes[inst.mesh].positions.len()
+        });
+    if differs {
+        return Err(crate::BakeError::Scene(format!(
+            "the per-vertex transfer in {} was baked for a different scene ('{}')",
+            dir.display(),
+            m.scene
+        )));
+    }
+    let mut instances = vec![];
+    for f in &m.instances {
+        let p = dir.join(&f.file);
+        let bytes = std::fs::read(&p).map_err(|e| io_err(&p, e))?;
+        if bytes.len() != f.vertices * nc * 4 {
+            return Err(io_err(
+                &p,
+                format!(
+                    "{} bytes, expected {} ({} vertices × {nc} coefficients × 4)",
+                    bytes.len(),
+                    f.vertices * nc * 4,
+                    f.vertices
+                ),
+            ));
+        }
+        let v: Vec<f32> = bytes
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(io_err(&p, "holds NaN or infinite coefficients"));
+        }
+        instances.push(v);
+    }
+    Ok((
+        VertexTransfer {
+            bands: m.bands,
+            instances,
+        },
+        m.transfer,
+    ))
 }
 
 /// Render per-vertex transfer on the CPU under the incident radiance of `light`: each vertex of

@@ -40,6 +40,12 @@ pub struct TexelSample {
     pub instance: u32,
     /// Whether the material is double-sided (its back faces are legitimate surfaces).
     pub double_sided: bool,
+    /// The mesh triangle the sample lies on, its barycentric weights of the second and third
+    /// vertices, and their change per texel step in x and y (the texel's footprint on it).
+    pub triangle: u32,
+    pub bary: Vec2,
+    pub dbdx: Vec2,
+    pub dbdy: Vec2,
 }
 
 /// The texels of one page; `None` where no surface lies.
@@ -217,7 +223,58 @@ fn sample(
         coverage,
         instance: ii,
         double_sided: mat.double_sided,
+        triangle: ti,
+        bary: b,
+        dbdx: Vec2::new(e2q.y, -e1q.y) / det,
+        dbdy: Vec2::new(-e2q.x, e1q.x) / det,
     }
+}
+
+/// Fuchs §5.7: the texel's normal as the mean of `samples` normal-map normals at uniformly
+/// random points of its footprint (±½ texel along the texel's axes, extrapolated on the
+/// triangle's plane), each through the triangle's interpolated tangent frame
+/// (`lightlab_trace::render::normal_mapped`, as the path tracer reads it). Fuchs's CaSHL uses
+/// 20 samples and nearest-texel reads; ours are bilinear. None when the material has no normal
+/// map or the mesh no tangents.
+pub fn normal_mapped_normal(
+    scene: &Scene,
+    t: &TexelSample,
+    samples: u32,
+    rng: &mut lightlab_core::sampling::Rng,
+) -> Option<Vec3> {
+    let inst = &scene.instances[t.instance as usize];
+    let mesh = &scene.meshes[inst.mesh];
+    let mat = &scene.materials[mesh.material];
+    if mat.normal_texture.is_none()
+        || mesh.tangents.len() != mesh.positions.len()
+        || mesh.uv0.len() != mesh.positions.len()
+        || samples == 0
+    {
+        return None;
+    }
+    let k = t.triangle as usize * 3;
+    let idx = [mesh.indices[k], mesh.indices[k + 1], mesh.indices[k + 2]].map(|i| i as usize);
+    let nm = inst.normal_matrix();
+    let mut sum = Vec3::ZERO;
+    for _ in 0..samples {
+        let u = rng.next_vec2() - Vec2::splat(0.5);
+        let b = t.bary + t.dbdx * u.x + t.dbdy * u.y;
+        let bw = [1.0 - b.x - b.y, b.x, b.y];
+        let uv = mesh.uv0[idx[0]] * bw[0] + mesh.uv0[idx[1]] * bw[1] + mesh.uv0[idx[2]] * bw[2];
+        let mut ns = if mesh.normals.len() == mesh.positions.len() {
+            (nm * (mesh.normals[idx[0]] * bw[0]
+                + mesh.normals[idx[1]] * bw[1]
+                + mesh.normals[idx[2]] * bw[2]))
+                .normalize_or(t.ng)
+        } else {
+            t.ng
+        };
+        if ns.dot(t.ng) < 0.0 {
+            ns = -ns;
+        }
+        sum += lightlab_trace::render::normal_mapped(scene, inst, mesh, idx, bw, uv, ns, t.ng);
+    }
+    Some(sum.normalize_or(t.ns))
 }
 
 /// Diffuse reflectance of a material at a UV: (1−metallic)·base colour (× textures).

@@ -107,6 +107,7 @@ fn fully_occluded_point_is_zero() {
         samples: 256,
         kind: TransferKind::Shadowed,
         seed: 1,
+        ..Default::default()
     };
     let t = point_transfer(&scene, &accel, &[(Vec3::ZERO, Vec3::Y)], &s, &[]).unwrap();
     assert!(t.iter().all(|x| *x == 0.0), "{t:?}");
@@ -158,6 +159,7 @@ fn interreflection_approaches_the_multi_bounce_reference() {
         samples: 512,
         kind: TransferKind::Shadowed,
         seed: 3,
+        ..Default::default()
     };
     let shadowed = mean(&point_transfer(&scene, &accel, &pts, &shadowed_s, &[]).unwrap());
     let inter_s = TransferSettings {
@@ -253,6 +255,10 @@ fn sh_lightmaps_match_the_reference_on_prt() {
             samples: 192,
             kind,
             seed: 5,
+            // The ground's dune normal map, as the reference shades it; the decimated knot as
+            // it is (the reference renders its own geometry, not its high-poly source).
+            normal_mapped: true,
+            detail: None,
         };
         let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
         for bands in [3, 4, 5, 6] {
@@ -276,6 +282,90 @@ fn sh_lightmaps_match_the_reference_on_prt() {
     assert!(i5.3 < s5.3, "{table:?}");
 }
 
+/// CaSHL's shooting (Fuchs §5.4.3) on SH light-maps of the open box: the floor's mean E/π
+/// converges to the path tracer's all-bounce light, as the gathering variant reaches its
+/// bounce count's; both far from shadowed transfer.
+#[test]
+fn shooting_converges_to_the_multi_bounce_reference() {
+    use lightlab_bake::cashl::ShootSettings;
+    use lightlab_bake::layout::LayoutSettings;
+    use lightlab_bake::prt::bake_sh_lightmaps;
+    use lightlab_bake::view::layout_hit;
+    let scene = open_box();
+    let bands = 4;
+    let light = uniform_light(bands);
+    let nc = sh::num_coeffs(bands);
+    let layout = LayoutSettings {
+        texels_per_metre: 16.0,
+        ..Default::default()
+    };
+    let floor: Vec<(Vec3, Vec3)> = (0..5)
+        .flat_map(|i| (0..5).map(move |j| (i, j)))
+        .map(|(i, j)| {
+            (
+                Vec3::new(-0.8 + 0.4 * i as f32, 0.0, -0.8 + 0.4 * j as f32),
+                Vec3::Y,
+            )
+        })
+        .collect();
+    let mean_floor = |kind: TransferKind| -> (f64, Option<lightlab_bake::cashl::ShootStats>) {
+        let s = TransferSettings {
+            bands,
+            samples: 256,
+            kind,
+            seed: 6,
+            ..Default::default()
+        };
+        let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
+        let accel = Accel::new(&sl.scene);
+        let mut t = vec![0.0f32; nc];
+        let sum: f64 = floor
+            .iter()
+            .map(|&(p, _)| {
+                let h = layout_hit(&sl.scene, &sl.layout, &accel, p + Vec3::Y, -Vec3::Y).unwrap();
+                sl.sample(h.page, h.uv, &mut t);
+                shade(&t, &light).x as f64
+            })
+            .sum();
+        (sum / floor.len() as f64, sl.shooting)
+    };
+    let (shadowed, _) = mean_floor(TransferKind::Shadowed);
+    let (gathered, _) = mean_floor(TransferKind::Interreflected { bounces: 3 });
+    let (shot, st) = mean_floor(TransferKind::Shooting(ShootSettings::default()));
+    let st = st.expect("shooting reports its figures");
+    let accel = Accel::new(&scene);
+    let tracer = PathTracer::new(&scene, &accel);
+    let reference = |depth: u32| -> f64 {
+        let rs = RenderSettings {
+            max_depth: depth,
+            min_depth: 0,
+            ..Default::default()
+        };
+        let mut sum = 0.0;
+        for (k, &(p, n)) in floor.iter().enumerate() {
+            let mut rng = Rng::new(12, k as u64);
+            for _ in 0..2048 {
+                sum += tracer.surface_radiance(p, n, n, Vec3::ONE, &rs, &mut rng).x as f64;
+            }
+        }
+        sum / (2048.0 * floor.len() as f64)
+    };
+    let (ref4, ref_all) = (reference(4), reference(32));
+    println!(
+        "open box floor E/π: shadowed {shadowed:.4}; gathered 3 bounces {gathered:.4} (tracer \
+         depth 4 {ref4:.4}); shot {shot:.4} in {} shots, {} patches, unshot {:.1e} (tracer \
+         depth 32 {ref_all:.4})",
+        st.shots, st.patches, st.unshot_fraction
+    );
+    assert!(!st.hit_shot_limit && st.unshot_fraction < 0.01, "{st:?}");
+    assert!((shot / ref_all - 1.0).abs() < 0.02, "{shot} vs {ref_all}");
+    assert!((gathered / ref4 - 1.0).abs() < 0.03, "{gathered} vs {ref4}");
+    assert!(
+        shot - shadowed > 0.9 * (ref_all - shadowed),
+        "{shot} {shadowed} {ref_all}"
+    );
+}
+
 #[test]
 fn sh_lightmap_folder_round_trips() {
     use lightlab_bake::layout::LayoutSettings;
@@ -290,6 +380,7 @@ fn sh_lightmap_folder_round_trips() {
         samples: 16,
         kind: TransferKind::Shadowed,
         seed: 2,
+        ..Default::default()
     };
     let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
     let dir = tempfile::tempdir().unwrap();
@@ -313,28 +404,44 @@ fn sh_lightmap_folder_round_trips() {
     ));
 }
 
-/// Textured (per-texel) against per-vertex transfer on the coarse knot, both judged against the
-/// path-traced high-poly knot in its place (McKenzie Chapter's claim): texels carry the
-/// shadows and self-occlusion that the coarse mesh's vertices cannot.
+/// Textured (per-texel) against per-vertex transfer on the decimated knot (meshopt, ≈2 % of the
+/// high-poly triangles), all judged against the path-traced high-poly knot in the same place:
+/// McKenzie Chapter's comparison (§6.2), with and without detail (position, normal and
+/// occlusion) baked from the high-poly source onto the decimated copy's texels.
 #[test]
-fn textured_transfer_beats_per_vertex_on_the_coarse_mesh() {
+fn textured_transfer_beats_per_vertex_on_the_decimated_mesh() {
+    use lightlab_bake::detail::detail_scene;
     use lightlab_bake::layout::LayoutSettings;
     use lightlab_bake::prt::{bake_sh_lightmaps, render_sh_lightmaps, render_vertex_transfer};
     use lightlab_bake::sh_light::ShLighting;
     use lightlab_core::metrics::relmse;
     use lightlab_core::sh_env::{EnvFormat, project_env};
-    let full = lightlab_scene::builtin::builtin("prt").unwrap();
+    let mut full = lightlab_scene::builtin::builtin("prt").unwrap();
+    // The knot is what is compared: a flat ground (no dune normal map) keeps the plane out of it.
+    full.materials
+        .iter_mut()
+        .for_each(|m| m.normal_texture = None);
     let idx = |name: &str| full.instances.iter().position(|i| i.name == name).unwrap();
     let (plane, high, low) = (idx("plane"), idx("knot_high"), idx("knot_low"));
-    // The high-poly scene (reference) and the coarse one with the low knot in the same place.
-    let mut high_scene = full.clone();
-    high_scene.instances = vec![full.instances[plane].clone(), full.instances[high].clone()];
-    high_scene.lights.clear();
-    let mut low_scene = high_scene.clone();
-    low_scene.instances[1] = lightlab_scene::Instance {
-        transform: full.instances[high].transform,
-        ..full.instances[low].clone()
-    };
+    let low_mesh = &full.meshes[full.instances[low].mesh];
+    let high_mesh = &full.meshes[full.instances[high].mesh];
+    assert_eq!(low_mesh.detail_source, Some(full.instances[high].mesh));
+    println!(
+        "decimated knot: {} triangles from {}",
+        low_mesh.triangle_count(),
+        high_mesh.triangle_count()
+    );
+    // The decimated knot in the high-poly knot's place, and the high-poly scene it stands for.
+    let mut low_scene = full.clone();
+    low_scene.lights.clear();
+    low_scene.instances = vec![
+        full.instances[plane].clone(),
+        lightlab_scene::Instance {
+            transform: full.instances[high].transform,
+            ..full.instances[low].clone()
+        },
+    ];
+    let high_scene = detail_scene(&low_scene);
     let env = full.environment.clone().unwrap();
     let bands = 5;
     let light: Vec<DVec3> = project_env(&env.image, EnvFormat::LatLong, bands)
@@ -360,31 +467,107 @@ fn textured_transfer_beats_per_vertex_on_the_coarse_mesh() {
         samples: 192,
         kind: TransferKind::Shadowed,
         seed: 9,
+        ..Default::default()
     };
     let low_accel = Accel::new(&low_scene);
     let (vt, _) = vertex_transfer(&low_scene, &low_accel, &s).unwrap();
-    let per_vertex = render_vertex_transfer(
-        &low_scene,
-        &vt,
-        &ShLighting::uniform(light.clone(), 0),
-        w,
-        w,
-        0,
-        8,
-    )
-    .unwrap();
+    let lighting = ShLighting::uniform(light, 0);
+    let per_vertex = render_vertex_transfer(&low_scene, &vt, &lighting, w, w, 0, 8).unwrap();
     let layout = LayoutSettings {
         texels_per_metre: 12.0,
         ..Default::default()
     };
-    let sl = bake_sh_lightmaps(&low_scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
-    let textured = render_sh_lightmaps(&sl, &ShLighting::uniform(light, 0), w, w, 0, 8).unwrap();
+    let textured = |detail| {
+        let s = TransferSettings { detail, ..s };
+        let sl = bake_sh_lightmaps(&low_scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
+        if let Some(st) = sl.detail {
+            println!("detail projection: {st:?}");
+            assert!(st.misses * 100 <= st.texels, "{st:?}");
+        }
+        render_sh_lightmaps(&sl, &lighting, w, w, 0, 8).unwrap()
+    };
+    let plain = textured(None);
+    let detailed = textured(Some(Default::default()));
+    lightlab_core::image::Image::write(
+        &detailed,
+        &std::env::temp_dir().join("lightlab-prt-detail.png"),
+        Default::default(),
+    )
+    .ok();
     let ev = relmse(&per_vertex, &reference).unwrap();
-    let et = relmse(&textured, &reference).unwrap();
+    let et = relmse(&plain, &reference).unwrap();
+    let ed = relmse(&detailed, &reference).unwrap();
     println!(
-        "coarse knot vs high-poly reference, 5 bands shadowed: per-vertex {ev:.4}, textured {et:.4}"
+        "decimated knot vs high-poly reference, 5 bands shadowed: per-vertex {ev:.4}, textured {et:.4}, textured with high-poly detail {ed:.4}"
     );
     assert!(et < 0.5 * ev, "per-vertex {ev}, textured {et}");
+    assert!(ed < 0.8 * et, "textured {et}, with detail {ed}");
+}
+
+/// Fuchs §5.7 on `prt`'s dune-mapped ground: SH light-maps whose texel normals average the
+/// normal map (and test both cosines) are closer to the path-traced reference — which shades
+/// the normal map per hit — than SH light-maps of the flat ground.
+#[test]
+fn normal_mapped_sh_lightmaps_on_prt() {
+    use lightlab_bake::layout::LayoutSettings;
+    use lightlab_bake::prt::{bake_sh_lightmaps, render_sh_lightmaps};
+    use lightlab_bake::sh_light::ShLighting;
+    use lightlab_core::metrics::relmse;
+    use lightlab_core::sh_env::{EnvFormat, project_env};
+    let mut scene = lightlab_scene::builtin::builtin("prt").unwrap();
+    scene.lights.clear();
+    assert!(scene.materials.iter().any(|m| m.normal_texture.is_some()));
+    let env = scene.environment.clone().unwrap();
+    let bands = 4;
+    let light: Vec<DVec3> = project_env(&env.image, EnvFormat::LatLong, bands)
+        .into_iter()
+        .map(|c| c * env.intensity as f64)
+        .collect();
+    let w = 72;
+    let accel = Accel::new(&scene);
+    let reference = PathTracer::new(&scene, &accel)
+        .render(
+            &RenderSettings {
+                width: w,
+                height: w,
+                spp: 256,
+                max_depth: 1,
+                ..Default::default()
+            },
+            &|_, _| true,
+        )
+        .unwrap();
+    let layout = LayoutSettings {
+        texels_per_metre: 12.0,
+        ..Default::default()
+    };
+    let lighting = ShLighting::uniform(light, 0);
+    let render = |normal_mapped| {
+        let s = TransferSettings {
+            bands,
+            samples: 192,
+            kind: TransferKind::Shadowed,
+            seed: 4,
+            normal_mapped,
+            // The reference renders the decimated knot as it is.
+            detail: None,
+        };
+        let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
+        render_sh_lightmaps(&sl, &lighting, w, w, 0, 8).unwrap()
+    };
+    let (flat, mapped) = (render(false), render(true));
+    lightlab_core::image::Image::write(
+        &mapped,
+        &std::env::temp_dir().join("lightlab-prt-normalmapped.png"),
+        Default::default(),
+    )
+    .ok();
+    let (ef, em) = (
+        relmse(&flat, &reference).unwrap(),
+        relmse(&mapped, &reference).unwrap(),
+    );
+    println!("prt, 4 bands shadowed vs 1-bounce reference: shl {ef:.4}, shl-normalmapped {em:.4}");
+    assert!(em < 0.8 * ef, "flat {ef}, normal-mapped {em}");
 }
 
 /// Fuchs §5.6 on `room`: k-means SH light-maps ≥ 10× smaller than raw f32 transfer, rendering
@@ -405,6 +588,7 @@ fn compressed_sh_lightmaps_on_room() {
         samples: 128,
         kind: TransferKind::Shadowed,
         seed: 3,
+        ..Default::default()
     };
     let layout = LayoutSettings {
         texels_per_metre: 8.0,

@@ -61,6 +61,7 @@ fn setup() -> (Scene, ShLightmaps, TransferSettings) {
         samples: 64,
         kind: TransferKind::Shadowed,
         seed: 1,
+        ..Default::default()
     };
     let layout = LayoutSettings {
         texels_per_metre: 12.0,

@@ -132,24 +132,7 @@ pub fn surface(scene: &Scene, accel: &Accel, hit: &Hit) -> Surface {
     }
     let uv = mesh.uv0[idx[0]] * b0 + mesh.uv0[idx[1]] * b1 + mesh.uv0[idx[2]] * b2;
     let material = mesh.material;
-    let mat = &scene.materials[material];
-    if let Some(r) = mat.normal_texture
-        && mesh.tangents.len() == mesh.positions.len()
-    {
-        let tg =
-            mesh.tangents[idx[0]] * b0 + mesh.tangents[idx[1]] * b1 + mesh.tangents[idx[2]] * b2;
-        let tw = Mat3::from_mat4(inst.transform) * tg.truncate();
-        let tw = (tw - ns * ns.dot(tw)).normalize_or_zero();
-        if tw != Vec3::ZERO {
-            let bw = ns.cross(tw) * if tg.w < 0.0 { -1.0 } else { 1.0 };
-            let s = scene.textures[r.texture].sample(uv).truncate() * 2.0 - Vec3::ONE;
-            let s = Vec3::new(s.x * mat.normal_scale, s.y * mat.normal_scale, s.z);
-            let mapped = (tw * s.x + bw * s.y + ns * s.z).normalize_or(ns);
-            if mapped.dot(ng) > 0.0 {
-                ns = mapped;
-            }
-        }
-    }
+    let ns = normal_mapped(scene, inst, mesh, idx, [b0, b1, b2], uv, ns, ng);
     Surface {
         p,
         ng,
@@ -157,6 +140,44 @@ pub fn surface(scene: &Scene, accel: &Accel, hit: &Hit) -> Surface {
         uv,
         material,
     }
+}
+
+/// The shading normal perturbed by the material's tangent-space normal map (glTF: xy scaled by
+/// `normal_scale`) at `uv`, in the frame of the triangle `idx`'s interpolated tangent (weights
+/// `bw`) around `ns`; `ns` itself where the mesh has no tangents, the material no normal map, or
+/// the mapped normal would face away from the geometric normal `ng`. Shared by the path tracer
+/// and the bakers (normal-mapped SH light-maps), so both read normal maps the same way.
+#[allow(clippy::too_many_arguments)]
+pub fn normal_mapped(
+    scene: &Scene,
+    inst: &lightlab_scene::Instance,
+    mesh: &lightlab_scene::Mesh,
+    idx: [usize; 3],
+    bw: [f32; 3],
+    uv: glam::Vec2,
+    ns: Vec3,
+    ng: Vec3,
+) -> Vec3 {
+    let mat = &scene.materials[mesh.material];
+    let Some(r) = mat.normal_texture else {
+        return ns;
+    };
+    if mesh.tangents.len() != mesh.positions.len() {
+        return ns;
+    }
+    let tg = mesh.tangents[idx[0]] * bw[0]
+        + mesh.tangents[idx[1]] * bw[1]
+        + mesh.tangents[idx[2]] * bw[2];
+    let tw = Mat3::from_mat4(inst.transform) * tg.truncate();
+    let tw = (tw - ns * ns.dot(tw)).normalize_or_zero();
+    if tw == Vec3::ZERO {
+        return ns;
+    }
+    let bw = ns.cross(tw) * if tg.w < 0.0 { -1.0 } else { 1.0 };
+    let s = scene.textures[r.texture].sample(uv).truncate() * 2.0 - Vec3::ONE;
+    let s = Vec3::new(s.x * mat.normal_scale, s.y * mat.normal_scale, s.z);
+    let mapped = (tw * s.x + bw * s.y + ns * s.z).normalize_or(ns);
+    if mapped.dot(ng) > 0.0 { mapped } else { ns }
 }
 
 /// Offset a ray origin off the surface, to the side of `dir`.
