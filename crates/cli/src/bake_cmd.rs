@@ -34,11 +34,11 @@ pub struct BakeArgs {
     /// baked light.
     #[arg(long)]
     pub directional: bool,
-    /// Radiosity: shooter block size n (n×n patches, CaLight's BlockSize, 1..8).
+    /// Radiosity and SH shooting: shooter block size n (n×n patches, CaLight's BlockSize, 1..8).
     #[arg(long, default_value_t = 3)]
     pub block_size: u32,
-    /// Radiosity: stop when no patch holds more unshot radiosity than this fraction of the
-    /// largest initial one (CaLight's StopUE, relative).
+    /// Radiosity and SH shooting: stop when no patch (block) holds more unshot radiosity
+    /// (transfer) than this fraction of the largest initial one (CaLight's StopUE, relative).
     #[arg(long, default_value_t = 1e-4)]
     pub stop: f64,
     /// How punctual lights enter the bake: `all=MODE` or `NAME=MODE`, MODE one of baked,
@@ -57,7 +57,8 @@ pub struct BakeArgs {
     /// `--method sh`: SH bands (l_max + 1), 1..8; 4 as Fuchs, 5 as McKenzie Chapter.
     #[arg(long, default_value_t = 4)]
     pub bands: usize,
-    /// `--method sh`: unshadowed, shadowed or interreflected transfer.
+    /// `--method sh`: unshadowed, shadowed, interreflected (bounces gathered) or shooting
+    /// (CaSHL: bounces shot between texels to `--stop`, grouped by `--block-size`) transfer.
     #[arg(long, default_value = "interreflected")]
     pub transfer: String,
     /// `--method sh`: bounces of inter-reflected transfer (default 2). With `--technique
@@ -68,6 +69,18 @@ pub struct BakeArgs {
     /// `--method sh`: directions per texel and vertex.
     #[arg(long, default_value_t = 256)]
     pub transfer_samples: u32,
+    /// `--method sh`: texel normals from the materials' normal maps, averaged over each texel
+    /// (Fuchs §5.7; the data of `shl-normalmapped`).
+    #[arg(long)]
+    pub normal_mapped: bool,
+    /// `--method sh`: bake decimated meshes (glTF mesh extras.lightlab.detailSource) as they
+    /// are, instead of taking position, normal and occlusion from their high-poly source.
+    #[arg(long)]
+    pub no_detail: bool,
+    /// `--method sh`: how far (fraction of the source mesh's bounding-box diagonal) a decimated
+    /// texel searches along its normal for the high-poly surface.
+    #[arg(long, default_value_t = 0.05)]
+    pub detail_cage: f32,
 }
 
 impl Default for BakeArgs {
@@ -87,6 +100,9 @@ impl Default for BakeArgs {
             transfer: "interreflected".into(),
             bounces: None,
             transfer_samples: 256,
+            normal_mapped: false,
+            no_detail: false,
+            detail_cage: 0.05,
         }
     }
 }
@@ -176,13 +192,17 @@ pub fn bake_with_progress(scene: &Scene, settings: &BakeSettings) -> Result<Ligh
 
 /// `lightlab bake --method radiosity|path`.
 pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
-    if method == "sh" {
+    // Textured PRT's data are SH light-maps (transfer per light-map texel).
+    if ["sh", "shl", "prt-textured"].contains(&method) {
         return bake_sh(scene, out, args, json);
     }
-    if ["shl", "prt", "prt-textured", "prt-hierarchical"].contains(&method) {
-        return Err(crate::not_implemented(format!(
-            "bake method '{method}' (the PRT bakers are planned; `sh` bakes SH light-maps)"
-        )));
+    if method == "prt" {
+        return bake_vertex(scene, out, args, json);
+    }
+    if method == "prt-hierarchical" {
+        return Err(crate::not_implemented(
+            "bake method 'prt-hierarchical' (McKenzie Chapter ch. 5's scene-tree filters)",
+        ));
     }
     let Some(m) = Method::parse(method) else {
         bail!(
@@ -230,23 +250,44 @@ pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool)
     Ok(())
 }
 
+/// `lightlab bake --method prt`: per-vertex transfer (Sloan et al. 2002), one binary file per
+/// instance and a manifest; `render --technique prt-vertex --baked DIR` reads it.
+fn bake_vertex(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
+    use lightlab_bake::prt::{vertex_transfer, write_vertex_transfer};
+    let s = crate::prt_cmd::transfer_settings(args)?;
+    eprintln!(
+        "baking {} per-vertex transfer: {} bands, {:?}, {} directions per vertex",
+        scene.name, s.bands, s.kind, s.samples
+    );
+    let t = std::time::Instant::now();
+    let accel = lightlab_trace::Accel::new(scene);
+    let (vt, _) = vertex_transfer(scene, &accel, &s)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let m = write_vertex_transfer(&vt, scene, &s, out, &scene.name, seconds)?;
+    let vertices: usize = m.instances.iter().map(|f| f.vertices).sum();
+    eprintln!(
+        "baked {} in {seconds:.2} s: {vertices} vertices of {} instances; wrote {}",
+        scene.name,
+        m.instances.len(),
+        out.display()
+    );
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "scene": scene.name, "method": "prt", "bands": s.bands, "seconds": seconds,
+                "vertices": vertices, "samples": s.samples, "transfer": args.transfer,
+            })
+        );
+    }
+    Ok(())
+}
+
 /// `lightlab bake --method sh`: SH light-maps (per-texel diffuse transfer, Fuchs §5).
 fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
-    use lightlab_bake::prt::{TransferKind, TransferSettings, bake_sh_lightmaps, write_sh};
-    let kind = match args.transfer.as_str() {
-        "unshadowed" => TransferKind::Unshadowed,
-        "shadowed" => TransferKind::Shadowed,
-        "interreflected" => TransferKind::Interreflected {
-            bounces: args.bounces.unwrap_or(2),
-        },
-        t => bail!("--transfer must be unshadowed, shadowed or interreflected, not '{t}'"),
-    };
-    let s = TransferSettings {
-        bands: args.bands,
-        samples: args.transfer_samples,
-        kind,
-        seed: args.bake_seed,
-    };
+    use lightlab_bake::prt::{bake_sh_lightmaps, write_sh};
+    let s = crate::prt_cmd::transfer_settings(args)?;
+    let kind = s.kind;
     let layout = lightlab_bake::layout::LayoutSettings {
         texels_per_metre: args.texels_per_metre,
         ..Default::default()
@@ -260,6 +301,28 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
         bake_sh_lightmaps(scene, &layout, &s, progress)
     })?;
     let seconds = t.elapsed().as_secs_f64();
+    if let Some(d) = &sl.detail {
+        eprintln!(
+            "detail from high-poly sources: {} texels projected (mean offset {:.4} m), {} missed \
+             the cage (kept on the decimated surface)",
+            d.texels - d.misses,
+            d.mean_offset,
+            d.misses
+        );
+    }
+    if let Some(st) = &sl.shooting {
+        eprintln!(
+            "shooting: {} shots over {} texels, unshot transfer left {:.2e}{}",
+            st.shots,
+            st.patches,
+            st.unshot_fraction,
+            if st.hit_shot_limit {
+                " (stopped at the shot limit)"
+            } else {
+                ""
+            }
+        );
+    }
     let m = write_sh(&sl, out, &scene.name, seconds)?;
     eprintln!(
         "baked {} in {seconds:.2} s: {} pages × {} coefficient images; wrote {}",
@@ -275,6 +338,7 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
                 "scene": scene.name, "method": "sh", "bands": s.bands, "seconds": seconds,
                 "pages": m.pages.len(), "texels_per_metre": args.texels_per_metre,
                 "samples": s.samples, "transfer": args.transfer,
+                "normal_mapped": s.normal_mapped, "detail": sl.detail, "shooting": sl.shooting,
             })
         );
     }

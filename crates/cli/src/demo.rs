@@ -130,7 +130,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 .map(|_| crate::bake_cmd::LIGHTMAP_TECHNIQUES.to_vec())
                 .unwrap_or_default();
             // The SH techniques on the scene made for them: one SH light-map bake serves shl,
-            // prt-textured and shl-compressed.
+            // prt-textured and shl-compressed; shl-normalmapped bakes its own.
             let sh_techniques = if name == "prt" {
                 crate::prt_cmd::SH_TECHNIQUES.to_vec()
             } else {
@@ -166,7 +166,11 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 let (img, times) = if crate::prt_cmd::SH_TECHNIQUES.contains(&technique) {
                     use crate::prt_cmd::{ShData, compressed, render_sh, sh_data_for};
                     let data = match technique {
-                        "prt-vertex" => sh_data_for(&scene, technique, None, &sh_bake, &sh_args)?,
+                        // Per-vertex transfer, and the normal-mapped SH light-maps (their own
+                        // bake, Fuchs §5.7).
+                        "prt-vertex" | "shl-normalmapped" => {
+                            sh_data_for(&scene, technique, None, &sh_bake, &sh_args)?
+                        }
                         _ => {
                             if sh_lightmaps.is_none() {
                                 match sh_data_for(&scene, "shl", None, &sh_bake, &sh_args)? {

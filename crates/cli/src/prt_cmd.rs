@@ -20,7 +20,13 @@ use lightlab_scene::Scene;
 use std::path::Path;
 
 /// The SH techniques.
-pub const SH_TECHNIQUES: [&str; 4] = ["prt-vertex", "prt-textured", "shl", "shl-compressed"];
+pub const SH_TECHNIQUES: [&str; 5] = [
+    "prt-vertex",
+    "prt-textured",
+    "shl",
+    "shl-compressed",
+    "shl-normalmapped",
+];
 
 /// Run-time options of the SH techniques.
 #[derive(Args, Clone, Debug)]
@@ -65,20 +71,38 @@ pub enum ShData {
     Vertex(Scene, VertexTransfer),
 }
 
-fn transfer_settings(args: &BakeArgs) -> Result<TransferSettings> {
+/// The transfer settings of the bake options (`bake --method sh`, the SH techniques).
+pub fn transfer_settings(args: &BakeArgs) -> Result<TransferSettings> {
     let kind = match args.transfer.as_str() {
         "unshadowed" => TransferKind::Unshadowed,
         "shadowed" => TransferKind::Shadowed,
         "interreflected" => TransferKind::Interreflected {
             bounces: args.bounces.unwrap_or(2),
         },
-        t => bail!("--transfer must be unshadowed, shadowed or interreflected, not '{t}'"),
+        "shooting" => TransferKind::Shooting(lightlab_bake::cashl::ShootSettings {
+            block_size: args.block_size,
+            stop: args.stop as f32,
+            ..Default::default()
+        }),
+        t => {
+            bail!("--transfer must be unshadowed, shadowed, interreflected or shooting, not '{t}'")
+        }
     };
+    if !(args.detail_cage > 0.0 && args.detail_cage.is_finite()) {
+        bail!(
+            "--detail-cage must be a positive fraction, not {}",
+            args.detail_cage
+        );
+    }
     Ok(TransferSettings {
         bands: args.bands,
         samples: args.transfer_samples,
         kind,
         seed: args.bake_seed,
+        detail: (!args.no_detail).then_some(lightlab_bake::detail::DetailSettings {
+            cage: args.detail_cage,
+        }),
+        normal_mapped: args.normal_mapped,
     })
 }
 
@@ -91,10 +115,13 @@ pub fn sh_data_for(
     bake: &BakeArgs,
     sh: &ShArgs,
 ) -> Result<ShData> {
-    let s = transfer_settings(bake)?;
+    let mut s = transfer_settings(bake)?;
+    // Fuchs §5.7: only the bake changes; the renderer is shl's.
+    s.normal_mapped |= technique == "shl-normalmapped";
     if technique == "prt-vertex" {
-        if baked.is_some() {
-            bail!("prt-vertex computes its per-vertex transfer at load; drop --baked");
+        if let Some(dir) = baked {
+            let (vt, _) = lightlab_bake::prt::read_vertex_transfer(dir, scene)?;
+            return Ok(ShData::Vertex(scene.clone(), vt));
         }
         eprintln!(
             "computing {} per-vertex transfer ({} bands, {:?}, {} directions)",
@@ -105,7 +132,17 @@ pub fn sh_data_for(
         return Ok(ShData::Vertex(scene.clone(), vt));
     }
     let sl = match baked {
-        Some(dir) => read_sh(dir, scene)?,
+        Some(dir) => {
+            let sl = read_sh(dir, scene)?;
+            if s.normal_mapped && !sl.settings.normal_mapped {
+                bail!(
+                    "{} was baked without normal maps; bake it with `lightlab bake --method sh \
+                     --normal-mapped` for {technique}",
+                    dir.display()
+                );
+            }
+            sl
+        }
         None => {
             eprintln!(
                 "no --baked folder: baking {} SH light-maps now ({} bands, {:?}, {} directions, \

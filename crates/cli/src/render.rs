@@ -23,7 +23,7 @@ pub const TECHNIQUES: [(&str, bool); 14] = [
     ("prt-textured", true),
     ("shl", true),
     ("shl-compressed", true),
-    ("shl-normalmapped", false),
+    ("shl-normalmapped", true),
     ("lpv", true),
     ("lpv-faithful", true),
 ];
@@ -36,8 +36,8 @@ pub struct RenderArgs {
     /// `reference` (path-traced ground truth), `direct` (direct light only), or a GPU
     /// technique: `phong`, `phong-shadow-volumes`, `phong-shadow-maps`, `lightmap` (baked
     /// light only) or `lightmap+phong` (baked indirect light plus dynamic lights and shadow
-    /// volumes); the SH techniques `prt-vertex`, `prt-textured`, `shl`, `shl-compressed`
-    /// (transfer × the scene's lights projected on SH); the light propagation volumes `lpv`
+    /// volumes); the SH techniques `prt-vertex`, `prt-textured`, `shl`, `shl-compressed`,
+    /// `shl-normalmapped` (transfer × the scene's lights projected on SH); the light propagation volumes `lpv`
     /// and `lpv-faithful` (shadow-mapped direct light + one bounce from the volume). The
     /// light-map and SH light-map techniques read `--baked DIR` or bake first.
     #[arg(long, default_value = "reference")]
