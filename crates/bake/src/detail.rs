@@ -223,13 +223,6 @@ impl DetailProjector {
     }
 }
 
-/// Object-space (the instance's local frame) unit normal packed into [0, 1]³, as a normal map
-/// stores it.
-pub fn encode_normal(inst: &Instance, n: Vec3) -> Vec3 {
-    let local = (glam::Mat3::from_mat4(inst.transform).transpose() * n).normalize_or(Vec3::Z);
-    local * 0.5 + Vec3::splat(0.5)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
