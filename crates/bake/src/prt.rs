@@ -650,6 +650,9 @@ pub struct ShManifest {
     /// What CaSHL's shooting did (absent: no shooting).
     #[serde(default)]
     pub shooting: Option<crate::cashl::ShootStats>,
+    /// The k-means compressed copy (Fuchs §5.6), when written.
+    #[serde(default)]
+    pub compressed: Option<crate::sh_compress::CompressedManifest>,
 }
 
 pub const SH_FORMAT: &str = "lightlab-sh-lightmaps";
@@ -662,6 +665,7 @@ fn io_err(path: &std::path::Path, e: impl std::fmt::Display) -> crate::BakeError
 /// the manifest, last (a folder with a manifest is complete).
 pub fn write_sh(
     sl: &ShLightmaps,
+    compressed: Option<&crate::sh_compress::CompressedSh>,
     dir: &std::path::Path,
     scene_name: &str,
     seconds: f64,
@@ -693,9 +697,29 @@ pub fn write_sh(
         seconds,
         detail: sl.detail,
         shooting: sl.shooting,
+        compressed: match compressed {
+            Some(c) => Some(crate::sh_compress::write_compressed(c, dir)?),
+            None => None,
+        },
     };
     crate::output::write_manifest(dir, &m)?;
     Ok(m)
+}
+
+/// Read an SH light-map folder and its compressed copy, when it has one.
+pub fn read_sh_with_compressed(
+    dir: &std::path::Path,
+    scene: &Scene,
+) -> Result<(ShLightmaps, Option<crate::sh_compress::CompressedSh>), crate::BakeError> {
+    let sl = read_sh(dir, scene)?;
+    let path = dir.join(crate::output::MANIFEST);
+    let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+    let m: ShManifest = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
+    let c = match &m.compressed {
+        Some(cm) => Some(crate::sh_compress::read_compressed(cm, dir, &sl)?),
+        None => None,
+    };
+    Ok((sl, c))
 }
 
 /// Read an SH light-map folder for `scene` (the unwrap is re-run and must match).

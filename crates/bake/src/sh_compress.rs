@@ -366,3 +366,111 @@ pub fn border_error(
     }
     (edge / norm, centre / norm)
 }
+
+/// Where a compressed SH light-map set lives in an SH folder (`manifest.json`'s `compressed`):
+/// `representatives.bin` (little-endian f32, representatives × bands², row-major) and per page
+/// `indices-K.bin` (little-endian u16, row-major: the representative of each texel; upload as an
+/// R16Uint texture).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CompressedManifest {
+    pub representatives: usize,
+    pub file: String,
+    pub index_pages: Vec<String>,
+    pub stats: CompressStats,
+}
+
+fn io_err(path: &std::path::Path, e: impl std::fmt::Display) -> crate::BakeError {
+    crate::BakeError::Io(format!("{}: {e}", path.display()))
+}
+
+/// Write the compressed data into `dir` (the SH folder's manifest then names them).
+pub fn write_compressed(
+    c: &CompressedSh,
+    dir: &std::path::Path,
+) -> Result<CompressedManifest, crate::BakeError> {
+    let file = "representatives.bin".to_string();
+    let bytes: Vec<u8> = c
+        .representatives
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    crate::output::write_bytes(&dir.join(&file), &bytes)?;
+    let mut index_pages = vec![];
+    for (k, p) in c.pages.iter().enumerate() {
+        let name = format!("indices-{k}.bin");
+        let bytes: Vec<u8> = p
+            .indices
+            .iter()
+            .flat_map(|&i| (i as u16).to_le_bytes())
+            .collect();
+        crate::output::write_bytes(&dir.join(&name), &bytes)?;
+        index_pages.push(name);
+    }
+    Ok(CompressedManifest {
+        representatives: c.stats.representatives,
+        file,
+        index_pages,
+        stats: c.stats.clone(),
+    })
+}
+
+/// Read compressed data named by an SH folder's manifest, for SH light-maps `sl` read from it
+/// (page sizes and band count are checked).
+pub fn read_compressed(
+    m: &CompressedManifest,
+    dir: &std::path::Path,
+    sl: &ShLightmaps,
+) -> Result<CompressedSh, crate::BakeError> {
+    let nc = sh::num_coeffs(sl.bands);
+    let p = dir.join(&m.file);
+    let bytes = std::fs::read(&p).map_err(|e| io_err(&p, e))?;
+    if bytes.len() != m.representatives * nc * 4 || m.representatives == 0 {
+        return Err(io_err(
+            &p,
+            format!(
+                "{} bytes, expected {} representatives × {nc} coefficients × 4",
+                bytes.len(),
+                m.representatives
+            ),
+        ));
+    }
+    let representatives: Vec<f32> = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    if representatives.iter().any(|v| !v.is_finite()) {
+        return Err(io_err(&p, "holds NaN or infinite coefficients"));
+    }
+    if m.index_pages.len() != sl.layout.pages.len() {
+        return Err(io_err(&p, "index pages do not match the layout's pages"));
+    }
+    let mut pages = vec![];
+    for (name, &[w, h]) in m.index_pages.iter().zip(&sl.layout.pages) {
+        let p = dir.join(name);
+        let bytes = std::fs::read(&p).map_err(|e| io_err(&p, e))?;
+        if bytes.len() != (w * h * 2) as usize {
+            return Err(io_err(&p, format!("does not hold a {w}×{h} u16 index map")));
+        }
+        let indices: Vec<u32> = bytes
+            .chunks_exact(2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]) as u32)
+            .collect();
+        if indices.iter().any(|&i| i as usize >= m.representatives) {
+            return Err(io_err(
+                &p,
+                "an index names a representative that does not exist",
+            ));
+        }
+        pages.push(IndexMap {
+            width: w,
+            height: h,
+            indices,
+        });
+    }
+    Ok(CompressedSh {
+        bands: sl.bands,
+        representatives,
+        pages,
+        stats: m.stats.clone(),
+    })
+}

@@ -384,9 +384,29 @@ fn sh_lightmap_folder_round_trips() {
     };
     let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let m = write_sh(&sl, dir.path(), "cornell", 0.0).unwrap();
+    let c = lightlab_bake::sh_compress::compress(
+        &sl,
+        &lightlab_bake::sh_compress::CompressSettings {
+            representatives: 32,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let m = write_sh(&sl, Some(&c), dir.path(), "cornell", 0.0).unwrap();
     assert_eq!(m.pages[0].len(), 6, "16 coefficients in 6 RGB images");
     let back = read_sh(dir.path(), &scene).unwrap();
+    // The compressed copy comes back exactly.
+    let (_, cb) = lightlab_bake::prt::read_sh_with_compressed(dir.path(), &scene).unwrap();
+    let cb = cb.expect("the folder holds the compressed copy");
+    assert_eq!(cb.representatives, c.representatives);
+    assert_eq!(cb.pages, c.pages);
+    // A truncated index page is a clear error naming the file.
+    let idx = dir.path().join("indices-0.bin");
+    let bytes = std::fs::read(&idx).unwrap();
+    std::fs::write(&idx, &bytes[..bytes.len() - 2]).unwrap();
+    let e = lightlab_bake::prt::read_sh_with_compressed(dir.path(), &scene).unwrap_err();
+    assert!(e.to_string().contains("indices-0.bin"), "{e}");
+    std::fs::write(&idx, &bytes).unwrap();
     assert_eq!(back.bands, 4);
     assert_eq!(back.layout, sl.layout);
     for (a, b) in back.pages.iter().flatten().zip(sl.pages.iter().flatten()) {

@@ -81,6 +81,10 @@ pub struct BakeArgs {
     /// texel searches along its normal for the high-poly surface.
     #[arg(long, default_value_t = 0.05)]
     pub detail_cage: f32,
+    /// `--method sh`: also write the k-means compressed copy with this many representatives
+    /// (Fuchs §5.6; `indices-K.bin` + `representatives.bin`, read by `shl-compressed`).
+    #[arg(long)]
+    pub compress: Option<usize>,
 }
 
 impl Default for BakeArgs {
@@ -103,6 +107,7 @@ impl Default for BakeArgs {
             normal_mapped: false,
             no_detail: false,
             detail_cage: 0.05,
+            compress: None,
         }
     }
 }
@@ -323,7 +328,26 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
             }
         );
     }
-    let m = write_sh(&sl, out, &scene.name, seconds)?;
+    let compressed = match args.compress {
+        Some(n) => {
+            let c = lightlab_bake::sh_compress::compress(
+                &sl,
+                &lightlab_bake::sh_compress::CompressSettings {
+                    representatives: n,
+                    ..Default::default()
+                },
+            )?;
+            let st = &c.stats;
+            eprintln!(
+                "compressed {} transfer vectors to {} representatives in {} iterations: {:.1}× \
+                 smaller, rms distance {:.4}",
+                st.vectors, st.representatives, st.iterations, st.ratio, st.rms_distance
+            );
+            Some(c)
+        }
+        None => None,
+    };
+    let m = write_sh(&sl, compressed.as_ref(), out, &scene.name, seconds)?;
     eprintln!(
         "baked {} in {seconds:.2} s: {} pages × {} coefficient images; wrote {}",
         scene.name,

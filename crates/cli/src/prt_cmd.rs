@@ -6,8 +6,8 @@ use crate::bake_cmd::BakeArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use lightlab_bake::prt::{
-    ShLightmaps, TransferKind, TransferSettings, VertexTransfer, bake_sh_lightmaps, read_sh,
-    vertex_transfer,
+    ShLightmaps, TransferKind, TransferSettings, VertexTransfer, bake_sh_lightmaps,
+    read_sh_with_compressed, vertex_transfer,
 };
 use lightlab_bake::sh_compress::{CompressSettings, CompressedSh, compress};
 use lightlab_bake::sh_light::{SamplePoints, ShLightSettings, ShLighting, ShProjector};
@@ -133,7 +133,16 @@ pub fn sh_data_for(
     }
     let sl = match baked {
         Some(dir) => {
-            let sl = read_sh(dir, scene)?;
+            let (sl, stored) = read_sh_with_compressed(dir, scene)?;
+            if technique == "shl-compressed"
+                && let Some(c) = stored
+            {
+                eprintln!(
+                    "using the folder's compressed copy ({} representatives, {:.1}× smaller)",
+                    c.stats.representatives, c.stats.ratio
+                );
+                return Ok(ShData::Compressed(sl, c));
+            }
             if s.normal_mapped && !sl.settings.normal_mapped {
                 bail!(
                     "{} was baked without normal maps; bake it with `lightlab bake --method sh \

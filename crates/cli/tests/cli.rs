@@ -677,6 +677,8 @@ fn bake_sh_lightmaps_writes_coefficient_pages() {
         "16",
         "--bounces",
         "1",
+        "--compress",
+        "32",
         "--out",
         out.to_str().unwrap(),
         "--json",
@@ -684,6 +686,8 @@ fn bake_sh_lightmaps_writes_coefficient_pages() {
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
     assert_eq!(v["bands"], 3);
+    // The compressed copy (Fuchs §5.6) beside the pages.
+    assert!(out.join("representatives.bin").exists() && out.join("indices-0.bin").exists());
     // 9 coefficients: three RGB images per page.
     for f in ["manifest.json", "sh-0-0.exr", "sh-0-1.exr", "sh-0-2.exr"] {
         assert!(out.join(f).exists(), "{f}");
