@@ -414,3 +414,33 @@ fn export_refuses_other_extensions_and_leaves_nothing() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     let _ = Vec4::ZERO;
 }
+
+/// A decimated mesh's high-poly source travels in `extras.lightlab.detailSource` and is loaded
+/// even when no node shows it; a source index that names no other mesh is an error.
+#[test]
+fn detail_sources_load_without_an_instance_and_bad_ones_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = builtin::builtin("prt").unwrap();
+    // Only the decimated knot (and the ground) are shown; the high-poly knot is only its source.
+    s.instances.retain(|i| i.name != "knot_high");
+    let p = dir.path().join("decimated.gltf");
+    gltf_io::export(&s, &p).unwrap();
+    let back = gltf_io::import(&p, LoadOptions::default()).unwrap();
+    let low = back.meshes.iter().find(|m| m.name == "knot_low").unwrap();
+    let src = low.detail_source.expect("the source link survives");
+    assert_eq!(back.meshes[src].name, "knot_high");
+    assert_eq!(back.meshes[src].triangle_count(), 86_400);
+    assert!(!back.instances.iter().any(|i| i.mesh == src));
+    // A source that names the mesh itself.
+    let text = std::fs::read_to_string(&p).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let meshes = json["meshes"].as_array_mut().unwrap();
+    let k = meshes
+        .iter()
+        .position(|m| m["name"] == "knot_low")
+        .unwrap();
+    meshes[k]["extras"]["lightlab"]["detailSource"] = serde_json::json!(k);
+    std::fs::write(&p, serde_json::to_string(&json).unwrap()).unwrap();
+    let msg = load_err(&p);
+    assert!(msg.contains("detailSource"), "{msg}");
+}
