@@ -20,6 +20,7 @@ pub mod radiosity;
 pub mod repair;
 pub mod seams;
 pub mod sh_compress;
+pub mod sh_cpca;
 pub mod sh_light;
 pub mod texels;
 pub mod view;

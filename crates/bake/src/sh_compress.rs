@@ -79,8 +79,8 @@ pub struct CompressedSh {
     pub stats: CompressStats,
 }
 
-/// Gather every texel's transfer vector (page-major, row-major).
-fn vectors(sl: &ShLightmaps) -> Vec<f32> {
+/// Every texel's transfer vector (page-major, row-major), empty texels included.
+pub fn texel_vectors(sl: &ShLightmaps) -> Vec<f32> {
     let nc = sh::num_coeffs(sl.bands);
     let mut out = vec![];
     for imgs in &sl.pages {
@@ -134,7 +134,7 @@ pub fn compress(sl: &ShLightmaps, s: &CompressSettings) -> Result<CompressedSh, 
         )));
     }
     let nc = sh::num_coeffs(sl.bands);
-    let data = vectors(sl);
+    let data = texel_vectors(sl);
     let n = data.len() / nc;
     if n == 0 {
         return Err(crate::BakeError::Settings("no texels to compress".into()));

@@ -435,10 +435,7 @@ fn detail_sources_load_without_an_instance_and_bad_ones_are_named() {
     let text = std::fs::read_to_string(&p).unwrap();
     let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
     let meshes = json["meshes"].as_array_mut().unwrap();
-    let k = meshes
-        .iter()
-        .position(|m| m["name"] == "knot_low")
-        .unwrap();
+    let k = meshes.iter().position(|m| m["name"] == "knot_low").unwrap();
     meshes[k]["extras"]["lightlab"]["detailSource"] = serde_json::json!(k);
     std::fs::write(&p, serde_json::to_string(&json).unwrap()).unwrap();
     let msg = load_err(&p);
