@@ -78,6 +78,10 @@ pub struct RasterArgs {
     /// Supersampling factor per axis (renders ssaa² samples per pixel).
     #[arg(long, default_value_t = 1)]
     pub ssaa: u32,
+    /// Leave the background black instead of drawing the environment where no surface is
+    /// seen (the path tracer draws it, so the default keeps renders comparable).
+    #[arg(long)]
+    pub no_background: bool,
 }
 
 impl Default for RasterArgs {
@@ -95,6 +99,7 @@ impl Default for RasterArgs {
             shadow_size: 2048,
             pcf: 1,
             ssaa: 1,
+            no_background: false,
         }
     }
 }
@@ -185,6 +190,7 @@ pub fn settings(
             w.validate().map_err(|e| anyhow::anyhow!("--wind: {e}"))?;
             w
         },
+        background: !a.no_background,
         ..Default::default()
     })
 }

@@ -279,6 +279,9 @@ pub struct RasterSettings {
     /// Wind sway of foliage, the same in every pass (amplitude 0: none). Shadow volumes are
     /// built on the CPU from the rest pose, so wind needs another shadow method.
     pub wind: lightlab_core::wind::Wind,
+    /// Draw the scene's environment map where no surface is seen, as the path tracer does
+    /// (so that renders compare pixel by pixel); false leaves the background black.
+    pub background: bool,
 }
 
 impl Default for RasterSettings {
@@ -303,6 +306,7 @@ impl Default for RasterSettings {
             scissor: true,
             exposure: 1.0,
             wind: Default::default(),
+            background: true,
         }
     }
 }
@@ -344,6 +348,7 @@ struct Pipelines {
     shadow_depth: wgpu::RenderPipeline,
     shadow_linear: wgpu::RenderPipeline,
     tonemap: wgpu::RenderPipeline,
+    sky: wgpu::RenderPipeline,
 }
 
 struct Targets {
@@ -386,6 +391,9 @@ pub struct Renderer {
     group2: wgpu::BindGroup,
     group3: wgpu::BindGroup,
     tonemap_group: wgpu::BindGroup,
+    /// The environment map (Rgba32Float, read texel by texel as the CPU's `radiance`), when
+    /// the scene has one and a background is drawn.
+    sky_group: Option<wgpu::BindGroup>,
     volume_buf: Option<wgpu::Buffer>,
     volume_ranges: Vec<std::ops::Range<u32>>,
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
@@ -575,6 +583,46 @@ pub(crate) fn texture(
         usage,
         view_formats: &[],
     })
+}
+
+/// The environment map as an Rgba32Float texture of radiance × intensity.
+fn env_texture(ctx: &GpuContext, env: &lightlab_scene::Environment) -> wgpu::TextureView {
+    let (w, h) = (env.image.width, env.image.height);
+    let tex = texture(
+        &ctx.device,
+        "environment",
+        w,
+        h,
+        1,
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
+    let data: Vec<f32> = env
+        .image
+        .data
+        .iter()
+        .flat_map(|c| (*c * env.intensity).extend(1.0).to_array())
+        .collect();
+    ctx.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &tex,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytemuck::cast_slice(&data),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * 16),
+            rows_per_image: Some(h),
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    tex.create_view(&Default::default())
 }
 
 fn layer_view(t: &wgpu::Texture, layer: u32) -> wgpu::TextureView {
@@ -1108,6 +1156,11 @@ impl Renderer {
         let pl_shadow = pl("shadow", &[&bgl0, &bgl1]);
         let pl_frame = pl("frame only", &[&bgl0]);
         let pl_tonemap = pl("tonemap", &[&bgl0, &bgl1, &bgl2, &bgl_tm]);
+        let bgl_sky = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("sky"),
+            entries: &[tex_entry(5, unfilt, d2)],
+        });
+        let pl_sky = pl("sky", &[&bgl0, &bgl1, &bgl2, &bgl_sky]);
 
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raster"),
@@ -1123,7 +1176,14 @@ impl Renderer {
             device,
             &module,
             s,
-            [&pl_scene, &pl_deferred, &pl_shadow, &pl_frame, &pl_tonemap],
+            [
+                &pl_scene,
+                &pl_deferred,
+                &pl_shadow,
+                &pl_frame,
+                &pl_tonemap,
+                &pl_sky,
+            ],
             gb_formats,
             linear_format,
         );
@@ -1305,6 +1365,21 @@ impl Renderer {
                 entry(3, wgpu::BindingResource::TextureView(&targets.gbuffer[3])),
             ],
         });
+        let sky_group = scene
+            .environment
+            .as_ref()
+            .filter(|_| settings.background)
+            .map(|env| {
+                let view = env_texture(ctx, env);
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("sky"),
+                    layout: &bgl_sky,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    }],
+                })
+            });
         let tonemap_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("tonemap"),
             layout: &bgl_tm,
@@ -1315,7 +1390,7 @@ impl Renderer {
         });
         let queries = ctx.has_timestamps().then(|| {
             let lpv_passes = lpv_res.as_ref().map_or(0, |l| 2 * l.light_count() + 1);
-            let count = 2 * (4 + 2 * n + views.len() + lpv_passes) as u32;
+            let count = 2 * (5 + 2 * n + views.len() + lpv_passes) as u32;
             let set = device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("timestamps"),
                 ty: wgpu::QueryType::Timestamp,
@@ -1355,6 +1430,7 @@ impl Renderer {
             group2,
             group3,
             tonemap_group,
+            sky_group,
             volume_buf: None,
             volume_ranges: vec![],
             queries,
@@ -1707,6 +1783,7 @@ impl Renderer {
             self.settings.path == RenderPath::Deferred,
         );
         if self.frame.lpv_indirect_only == 0 {
+            self.sky_pass(&mut enc, &mut labels);
             self.light_passes(&mut enc, &mut labels);
         }
         // Tonemap: the 8-bit frame a viewer would display.
@@ -1825,6 +1902,40 @@ impl Renderer {
             };
             self.draw_scene(&mut pass, pipes, None);
         }
+    }
+
+    /// The environment where no surface was drawn.
+    fn sky_pass(&self, enc: &mut wgpu::CommandEncoder, labels: &mut Vec<&'static str>) {
+        let Some(group) = &self.sky_group else {
+            return;
+        };
+        let ts = self.timestamps(labels, "sky");
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("sky"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.targets.hdr_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.targets.depth_view,
+                depth_ops: Some(load_f32()),
+                stencil_ops: Some(load_u32()),
+            }),
+            timestamp_writes: ts,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipelines.sky);
+        pass.set_bind_group(0, &self.group0, &[0]);
+        pass.set_bind_group(1, &self.scene.materials[0].bind_group, &[]);
+        pass.set_bind_group(2, &self.group2, &[]);
+        pass.set_bind_group(3, group, &[]);
+        pass.draw(0..3, 0..1);
     }
 
     /// Per light: stencil marks, then its additive lighting pass.
@@ -1998,13 +2109,20 @@ impl Pipelines {
         device: &wgpu::Device,
         module: &wgpu::ShaderModule,
         s: &RasterSettings,
-        layouts: [&wgpu::PipelineLayout; 5],
+        layouts: [&wgpu::PipelineLayout; 6],
         gb_formats: [wgpu::TextureFormat; 4],
         linear_format: wgpu::TextureFormat,
     ) -> Pipelines {
         use wgpu::CompareFunction as C;
         use wgpu::StencilOperation as Op;
-        let [pl_scene, pl_deferred, pl_shadow, pl_frame, pl_tonemap] = layouts;
+        let [
+            pl_scene,
+            pl_deferred,
+            pl_shadow,
+            pl_frame,
+            pl_tonemap,
+            pl_sky,
+        ] = layouts;
         let keep = stencil_face(C::Always, Op::Keep, Op::Keep);
         let eq0 = stencil_face(C::Equal, Op::Keep, Op::Keep);
         let no_bias = wgpu::DepthBiasState::default();
@@ -2256,6 +2374,21 @@ impl Pipelines {
                 cull: None,
             },
         );
+        // Where the depth buffer is still clear (reversed depth: 0), the environment.
+        let sky = pipeline(
+            device,
+            module,
+            PipeDesc {
+                label: "sky",
+                layout: pl_sky,
+                vs: "fullscreen_vs",
+                buffers: &[],
+                fs: Some("sky_fs"),
+                targets: &[hdr(None)],
+                depth: depth_state(false, C::Equal, keep, keep, 0, no_bias),
+                cull: None,
+            },
+        );
         Pipelines {
             ambient,
             light,
@@ -2269,6 +2402,7 @@ impl Pipelines {
             shadow_depth,
             shadow_linear,
             tonemap,
+            sky,
         }
     }
 }

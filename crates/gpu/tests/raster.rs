@@ -313,3 +313,71 @@ fn fuchs_attenuation_cuts_off_at_the_radius() {
         assert!(sum(&lit) > 0.0);
     }
 }
+
+/// The background: where no surface is seen, the GPU shows the environment exactly as the path
+/// tracer looks it up (same direction, same texel), so renders compare pixel by pixel.
+#[test]
+fn background_is_the_environment_as_the_path_tracer_sees_it() {
+    let Some(ctx) = test_context() else { return };
+    let mut scene = builtin::builtin("spheres").unwrap();
+    scene.lights.clear();
+    // A busy environment: every texel different, so a wrong direction or texel shows.
+    let (w, h) = (64u32, 32u32);
+    scene.environment = Some(lightlab_scene::Environment {
+        image: Image::from_fn(w, h, |x, y| {
+            Vec3::new(
+                x as f32 / w as f32,
+                y as f32 / h as f32,
+                ((x * 7 + y * 13) % 17) as f32 / 17.0,
+            )
+        }),
+        intensity: 2.0,
+    });
+    let s = RasterSettings {
+        width: N,
+        height: N,
+        shadows: ShadowMethod::None,
+        ambient: Ambient::None,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &scene, s).unwrap();
+    r.render(&ctx);
+    let gpu = r.read_hdr(&ctx).unwrap();
+    let env = scene.environment.as_ref().unwrap();
+    let cam = &scene.cameras[0];
+    let accel = Accel::new(&scene);
+    let (mut sky, mut same) = (0usize, 0usize);
+    for y in 0..N {
+        for x in 0..N {
+            let ndc = Vec2::new(
+                (x as f32 + 0.5) / N as f32 * 2.0 - 1.0,
+                1.0 - (y as f32 + 0.5) / N as f32 * 2.0,
+            );
+            let d = cam.ray_direction(ndc, 1.0);
+            if accel.intersect(cam.position(), d, f32::INFINITY).is_some() {
+                continue;
+            }
+            sky += 1;
+            if (gpu.get(x, y) - env.radiance(d)).abs().max_element() < 1e-3 {
+                same += 1;
+            }
+        }
+    }
+    eprintln!("background: {same} of {sky} sky pixels equal the path tracer's lookup");
+    assert!(sky > (N * N / 4) as usize, "{sky} sky pixels");
+    // Texel boundaries crossed between the two direction computations may differ.
+    assert!(same as f64 >= 0.99 * sky as f64, "{same} of {sky}");
+    // And without a background, black.
+    let s = RasterSettings {
+        width: N,
+        height: N,
+        shadows: ShadowMethod::None,
+        ambient: Ambient::None,
+        background: false,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &scene, s).unwrap();
+    r.render(&ctx);
+    let dark = r.read_hdr(&ctx).unwrap();
+    assert_eq!(dark.get(0, 0), Vec3::ZERO);
+}

@@ -704,6 +704,30 @@ fn planar_vs(v: VertexIn) -> @builtin(position) vec4<f32> {
     return frame.view_proj * flat;
 }
 
+// ---- background --------------------------------------------------------------------------------
+
+@group(3) @binding(5) var env_map: texture_2d<f32>;
+
+// The environment where no surface was drawn, read texel by texel as the path tracer's
+// `Environment::radiance` (u = ½ + atan2(x, −z)/2π, v = acos(y)/π, nearest texel).
+@fragment
+fn sky_fs(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let ndc = vec2<f32>(
+        in.clip.x / frame.viewport.x * 2.0 - 1.0,
+        1.0 - in.clip.y / frame.viewport.y * 2.0,
+    );
+    // A point on the near plane (reversed depth: z = 1) along the pixel's ray.
+    let q = frame.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
+    let d = normalize(q.xyz / q.w - frame.camera_pos);
+    let size = vec2<f32>(textureDimensions(env_map));
+    let uv = vec2<f32>(
+        0.5 + atan2(d.x, -d.z) / (2.0 * PI),
+        acos(clamp(d.y, -1.0, 1.0)) / PI,
+    );
+    let t = min(vec2<i32>(uv * size), vec2<i32>(size) - vec2<i32>(1));
+    return vec4<f32>(textureLoad(env_map, max(t, vec2<i32>(0)), 0).rgb, 0.0);
+}
+
 // ---- output ------------------------------------------------------------------------------------
 
 @group(3) @binding(4) var hdr_in: texture_2d<f32>;
