@@ -706,14 +706,28 @@ pub fn write_sh(
     Ok(m)
 }
 
+/// The manifest of a folder baked by `lightlab bake --method {method}`: its path and text.
+fn manifest_text(
+    dir: &std::path::Path,
+    method: &str,
+) -> Result<(std::path::PathBuf, String), crate::BakeError> {
+    let path = dir.join(crate::output::MANIFEST);
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        io_err(
+            &path,
+            format!("{e} (is this a folder written by `lightlab bake --method {method}`?)"),
+        )
+    })?;
+    Ok((path, text))
+}
+
 /// Read an SH light-map folder and its compressed copy, when it has one.
 pub fn read_sh_with_compressed(
     dir: &std::path::Path,
     scene: &Scene,
 ) -> Result<(ShLightmaps, Option<crate::sh_compress::CompressedSh>), crate::BakeError> {
     let sl = read_sh(dir, scene)?;
-    let path = dir.join(crate::output::MANIFEST);
-    let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+    let (path, text) = manifest_text(dir, "sh")?;
     let m: ShManifest = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
     let c = match &m.compressed {
         Some(cm) => Some(crate::sh_compress::read_compressed(cm, dir, &sl)?),
@@ -724,13 +738,7 @@ pub fn read_sh_with_compressed(
 
 /// Read an SH light-map folder for `scene` (the unwrap is re-run and must match).
 pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crate::BakeError> {
-    let path = dir.join(crate::output::MANIFEST);
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        io_err(
-            &path,
-            format!("{e} (is this a folder written by `lightlab bake --method sh`?)"),
-        )
-    })?;
+    let (path, text) = manifest_text(dir, "sh")?;
     let m: ShManifest = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
     if m.format != SH_FORMAT || m.version != 1 {
         return Err(io_err(
@@ -845,13 +853,7 @@ pub fn read_vertex_transfer(
     dir: &std::path::Path,
     scene: &Scene,
 ) -> Result<(VertexTransfer, TransferSettings), crate::BakeError> {
-    let path = dir.join(crate::output::MANIFEST);
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        io_err(
-            &path,
-            format!("{e} (is this a folder written by `lightlab bake --method prt`?)"),
-        )
-    })?;
+    let (path, text) = manifest_text(dir, "prt")?;
     let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
     let format = v
         .get("format")

@@ -36,6 +36,36 @@ fn grid(name: &str, o: Vec3, u: Vec3, v: Vec3, n: u32, material: usize) -> Mesh 
     m
 }
 
+/// The scene's environment projected on `bands` bands (× its intensity).
+fn env_sh(scene: &Scene, bands: usize) -> Vec<DVec3> {
+    use lightlab_core::sh_env::{EnvFormat, project_env};
+    let env = scene
+        .environment
+        .as_ref()
+        .expect("an environment-lit scene");
+    project_env(&env.image, EnvFormat::LatLong, bands)
+        .into_iter()
+        .map(|c| c * env.intensity as f64)
+        .collect()
+}
+
+/// The path-traced reference at w×w, 256 spp, at most `depth` scattering events.
+fn path_traced(scene: &Scene, w: u32, depth: u32) -> Image {
+    let accel = Accel::new(scene);
+    PathTracer::new(scene, &accel)
+        .render(
+            &RenderSettings {
+                width: w,
+                height: w,
+                spp: 256,
+                max_depth: depth,
+                ..Default::default()
+            },
+            &|_, _| true,
+        )
+        .unwrap()
+}
+
 fn uniform_sky(radiance: f32) -> Environment {
     Environment {
         image: Image::from_fn(16, 8, |_, _| Vec3::splat(radiance)),
@@ -211,34 +241,15 @@ fn sh_lightmaps_match_the_reference_on_prt() {
     use lightlab_bake::prt::{bake_sh_lightmaps, render_sh_lightmaps};
     use lightlab_bake::sh_light::ShLighting;
     use lightlab_core::metrics::relmse;
-    use lightlab_core::sh_env::{EnvFormat, project_env};
     let mut scene = lightlab_scene::builtin::builtin("prt").unwrap();
     scene.lights.clear();
-    let env = scene.environment.clone().expect("prt has a sky");
     let layout = LayoutSettings {
         texels_per_metre: 12.0,
         ..Default::default()
     };
     let (w, spp) = (72u32, 8u32);
-    let reference = |depth: u32| {
-        let accel = Accel::new(&scene);
-        PathTracer::new(&scene, &accel)
-            .render(
-                &RenderSettings {
-                    width: w,
-                    height: w,
-                    spp: 256,
-                    max_depth: depth,
-                    ..Default::default()
-                },
-                &|_, _| true,
-            )
-            .unwrap()
-    };
-    let light_full: Vec<DVec3> = project_env(&env.image, EnvFormat::LatLong, 6)
-        .into_iter()
-        .map(|c| c * env.intensity as f64)
-        .collect();
+    let reference = |depth: u32| path_traced(&scene, w, depth);
+    let light_full = env_sh(&scene, 6);
     let truncated = |bands: usize| -> Vec<DVec3> {
         let mut l = light_full.clone();
         l[sh::num_coeffs(bands)..].fill(DVec3::ZERO);
@@ -435,7 +446,6 @@ fn textured_transfer_beats_per_vertex_on_the_decimated_mesh() {
     use lightlab_bake::prt::{bake_sh_lightmaps, render_sh_lightmaps, render_vertex_transfer};
     use lightlab_bake::sh_light::ShLighting;
     use lightlab_core::metrics::relmse;
-    use lightlab_core::sh_env::{EnvFormat, project_env};
     let mut full = lightlab_scene::builtin::builtin("prt").unwrap();
     // The knot is what is compared: a flat ground (no dune normal map) keeps the plane out of it.
     full.materials
@@ -462,26 +472,10 @@ fn textured_transfer_beats_per_vertex_on_the_decimated_mesh() {
         },
     ];
     let high_scene = detail_scene(&low_scene);
-    let env = full.environment.clone().unwrap();
     let bands = 5;
-    let light: Vec<DVec3> = project_env(&env.image, EnvFormat::LatLong, bands)
-        .into_iter()
-        .map(|c| c * env.intensity as f64)
-        .collect();
+    let light = env_sh(&full, bands);
     let w = 72;
-    let accel = Accel::new(&high_scene);
-    let reference = PathTracer::new(&high_scene, &accel)
-        .render(
-            &RenderSettings {
-                width: w,
-                height: w,
-                spp: 256,
-                max_depth: 1,
-                ..Default::default()
-            },
-            &|_, _| true,
-        )
-        .unwrap();
+    let reference = path_traced(&high_scene, w, 1);
     let s = TransferSettings {
         bands,
         samples: 192,
@@ -533,30 +527,13 @@ fn normal_mapped_sh_lightmaps_on_prt() {
     use lightlab_bake::prt::{bake_sh_lightmaps, render_sh_lightmaps};
     use lightlab_bake::sh_light::ShLighting;
     use lightlab_core::metrics::relmse;
-    use lightlab_core::sh_env::{EnvFormat, project_env};
     let mut scene = lightlab_scene::builtin::builtin("prt").unwrap();
     scene.lights.clear();
     assert!(scene.materials.iter().any(|m| m.normal_texture.is_some()));
-    let env = scene.environment.clone().unwrap();
     let bands = 4;
-    let light: Vec<DVec3> = project_env(&env.image, EnvFormat::LatLong, bands)
-        .into_iter()
-        .map(|c| c * env.intensity as f64)
-        .collect();
+    let light = env_sh(&scene, bands);
     let w = 72;
-    let accel = Accel::new(&scene);
-    let reference = PathTracer::new(&scene, &accel)
-        .render(
-            &RenderSettings {
-                width: w,
-                height: w,
-                spp: 256,
-                max_depth: 1,
-                ..Default::default()
-            },
-            &|_, _| true,
-        )
-        .unwrap();
+    let reference = path_traced(&scene, w, 1);
     let layout = LayoutSettings {
         texels_per_metre: 12.0,
         ..Default::default()

@@ -1904,14 +1904,16 @@ impl Renderer {
         }
     }
 
-    /// The environment where no surface was drawn.
-    fn sky_pass(&self, enc: &mut wgpu::CommandEncoder, labels: &mut Vec<&'static str>) {
-        let Some(group) = &self.sky_group else {
-            return;
-        };
-        let ts = self.timestamps(labels, "sky");
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("sky"),
+    /// A pass adding to the HDR target over the frame's depth and stencil (kept).
+    fn hdr_pass_loading_depth<'e>(
+        &self,
+        enc: &'e mut wgpu::CommandEncoder,
+        labels: &mut Vec<&'static str>,
+        label: &'static str,
+    ) -> wgpu::RenderPass<'e> {
+        let ts = self.timestamps(labels, label);
+        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: &self.targets.hdr_view,
                 depth_slice: None,
@@ -1929,7 +1931,15 @@ impl Renderer {
             timestamp_writes: ts,
             occlusion_query_set: None,
             multiview_mask: None,
-        });
+        })
+    }
+
+    /// The environment where no surface was drawn.
+    fn sky_pass(&self, enc: &mut wgpu::CommandEncoder, labels: &mut Vec<&'static str>) {
+        let Some(group) = &self.sky_group else {
+            return;
+        };
+        let mut pass = self.hdr_pass_loading_depth(enc, labels, "sky");
         pass.set_pipeline(&self.pipelines.sky);
         pass.set_bind_group(0, &self.group0, &[0]);
         pass.set_bind_group(1, &self.scene.materials[0].bind_group, &[]);
@@ -1976,24 +1986,7 @@ impl Renderer {
                 pass.set_bind_group(0, &self.group0, &slot);
                 self.stencil_marks(&mut pass, li, false);
             }
-            let ts = self.timestamps(labels, "lighting");
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("lighting"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.targets.hdr_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: load,
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.targets.depth_view,
-                    depth_ops: Some(load_f32()),
-                    stencil_ops: Some(load_u32()),
-                }),
-                timestamp_writes: ts,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = self.hdr_pass_loading_depth(enc, labels, "lighting");
             pass.set_scissor_rect(sc.0, sc.1, sc.2, sc.3);
             pass.set_stencil_reference(0);
             pass.set_bind_group(0, &self.group0, &slot);
