@@ -164,7 +164,15 @@ pub fn not_implemented(what: impl Into<String>) -> anyhow::Error {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            // clap exits 2 on a usage error; lightlab keeps 2 for "not implemented yet", so a
+            // mistyped option is an ordinary error (1). Help and version exit 0.
+            return ExitCode::from(if e.use_stderr() { 1 } else { 0 });
+        }
+    };
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

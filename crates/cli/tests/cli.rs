@@ -215,6 +215,23 @@ fn unbuilt_methods_exit_with_code_2() {
     let o = lightlab(&["bake", "--scene", "cornell", "--method", "prt-hierarchical"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("not implemented yet"), "{}", stderr(&o));
+    // A mistyped option or a malformed value is an ordinary error (1), not "not implemented".
+    for args in [
+        vec!["render", "--scene", "cornell", "--no-such-option"],
+        vec![
+            "bake",
+            "--scene",
+            "prt",
+            "--method",
+            "sh",
+            "--detail-cage",
+            "-1",
+        ],
+    ] {
+        let o = lightlab(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+    }
+    assert_eq!(lightlab(&["--help"]).status.code(), Some(0));
 }
 
 #[test]
