@@ -303,14 +303,29 @@ pub fn surface_transfer(
     s: &TransferSettings,
     bounces: &[VertexTransfer],
 ) -> Result<Vec<f32>, TransferError> {
+    Ok(surface_transfer_ao(scene, accel, points, s, bounces)?.0)
+}
+
+/// [`surface_transfer`] and each point's ambient occlusion: the visible fraction of the
+/// cosine-weighted hemisphere, t₀/Y₀ of the direct (shadowed) term (1 for unshadowed transfer).
+pub fn surface_transfer_ao(
+    scene: &Scene,
+    accel: &Accel,
+    points: &[(Vec3, Vec3, Vec3)],
+    s: &TransferSettings,
+    bounces: &[VertexTransfer],
+) -> Result<(Vec<f32>, Vec<f32>), TransferError> {
     check(s)?;
     let nc = sh::num_coeffs(s.bands);
     let zonal = sh::clamped_cosine_zonal(s.bands);
+    let y0 = 0.5 / std::f32::consts::PI.sqrt();
     let mut out = vec![0.0f32; points.len() * nc];
+    let mut ao = vec![1.0f32; points.len()];
     out.par_chunks_mut(nc)
+        .zip(ao.par_iter_mut())
         .zip(points.par_iter())
         .enumerate()
-        .for_each(|(k, (o, &(p, n, ng)))| {
+        .for_each(|(k, ((o, ao), &(p, n, ng)))| {
             if s.kind == TransferKind::Unshadowed {
                 let c = sh::zonal_to_axis(&zonal, n.as_dvec3());
                 for (a, b) in o.iter_mut().zip(c) {
@@ -319,6 +334,7 @@ pub fn surface_transfer(
                 return;
             }
             gather_point(scene, accel, p, n, ng, s, k as u64, None, o);
+            *ao = o[0] / y0;
             let mut add = vec![0.0f32; nc];
             for prev in bounces {
                 gather_point(scene, accel, p, n, ng, s, k as u64, Some(prev), &mut add);
@@ -327,7 +343,7 @@ pub fn surface_transfer(
                 }
             }
         });
-    Ok(out)
+    Ok((out, ao))
 }
 
 /// Per-vertex transfer of the whole scene and, for inter-reflection, what each bounce gathers
@@ -408,6 +424,18 @@ pub struct ShLightmaps {
     pub detail: Option<crate::detail::DetailStats>,
     /// What CaSHL's shooting did (None: no shooting).
     pub shooting: Option<crate::cashl::ShootStats>,
+    /// Per page, the baked normal and ambient occlusion (empty when read from a folder).
+    pub detail_pages: Vec<DetailPage>,
+}
+
+/// What a bake learnt of the surface at each texel, for other techniques: with detail from a
+/// high-poly source these are its normal map and occlusion map, on the decimated mesh's atlas.
+#[derive(Clone, Debug)]
+pub struct DetailPage {
+    /// Unit shading normal in the instance's object space (xyz, signed, not packed).
+    pub normal: lightlab_core::image::Image,
+    /// Visible fraction of the cosine-weighted hemisphere (all three channels).
+    pub occlusion: lightlab_core::image::Image,
 }
 
 impl ShLightmaps {
@@ -485,6 +513,7 @@ pub fn bake_sh_lightmaps(
         _ => *s,
     };
     let mut computed = vec![];
+    let mut occlusion = vec![];
     for (k, (page, ok)) in texels.pages.iter().zip(&valid).enumerate() {
         if !progress("texel transfer", k, total_pages) {
             return Err(crate::BakeError::Cancelled);
@@ -525,8 +554,9 @@ pub fn bake_sh_lightmaps(
             .iter()
             .map(|sp| (sp.p + sp.ng * ray_eps(sp.p), sp.ns, sp.ng))
             .collect();
-        let tr = surface_transfer(tscene, taccel, &pts, &direct_s, &sources)?;
+        let (tr, ao) = surface_transfer_ao(tscene, taccel, &pts, &direct_s, &sources)?;
         computed.push((idx, surface, tr));
+        occlusion.push(ao);
     }
     progress("texel transfer", total_pages, total_pages);
     let mut shoot_stats = None;
@@ -575,9 +605,35 @@ pub fn bake_sh_lightmaps(
             }
         }
     }
-    for (k, (idx, _, tr)) in computed.iter().enumerate() {
+    let mut detail_pages = vec![];
+    for (k, ((idx, surface, tr), ao)) in computed.iter().zip(&occlusion).enumerate() {
         let page = &texels.pages[k];
         let n = page.samples.len();
+        // The baked normal (object space of the texel's instance) and occlusion, dilated.
+        let mut nrm = vec![Vec3::ZERO; n];
+        let mut occ = vec![Vec3::ZERO; n];
+        let mut filled = vec![false; n];
+        for (j, &i) in idx.iter().enumerate() {
+            let t = page.samples[i].as_ref().expect("filtered");
+            let m = glam::Mat3::from_mat4(scene.instances[t.instance as usize].transform);
+            nrm[i] = (m.transpose() * surface[j].ns).normalize_or(Vec3::Z);
+            occ[i] = Vec3::splat(ao[j].clamp(0.0, 1.0));
+            filled[i] = true;
+        }
+        let mut filled2 = filled.clone();
+        crate::repair::dilate(&mut nrm, &mut filled, page.width, page.height, 64);
+        // Dilation averages: keep the normal map unit length.
+        nrm.iter_mut().for_each(|n| *n = n.normalize_or(Vec3::Z));
+        crate::repair::dilate(&mut occ, &mut filled2, page.width, page.height, 64);
+        let image = |data| lightlab_core::image::Image {
+            width: page.width,
+            height: page.height,
+            data,
+        };
+        detail_pages.push(DetailPage {
+            normal: image(nrm),
+            occlusion: image(occ),
+        });
         let mut imgs = vec![];
         for k in 0..images {
             let mut v = vec![Vec3::ZERO; n];
@@ -606,6 +662,7 @@ pub fn bake_sh_lightmaps(
         settings: *s,
         detail: detail_stats,
         shooting: shoot_stats,
+        detail_pages,
     })
 }
 
@@ -653,6 +710,13 @@ pub struct ShManifest {
     /// The k-means compressed copy (Fuchs §5.6), when written.
     #[serde(default)]
     pub compressed: Option<crate::sh_compress::CompressedManifest>,
+    /// Per page: the baked object-space normal (`normal-K.exr`, signed xyz) and ambient
+    /// occlusion (`occlusion-K.exr`) — with a high-poly detail source, its normal and occlusion
+    /// maps on the decimated mesh's light-map atlas.
+    #[serde(default)]
+    pub normal_pages: Vec<String>,
+    #[serde(default)]
+    pub occlusion_pages: Vec<String>,
 }
 
 pub const SH_FORMAT: &str = "lightlab-sh-lightmaps";
@@ -684,6 +748,23 @@ pub fn write_sh(
         }
         pages.push(names);
     }
+    let mut normal_pages = vec![];
+    let mut occlusion_pages = vec![];
+    for (k, d) in sl.detail_pages.iter().enumerate() {
+        for (img, name, list) in [
+            (&d.normal, format!("normal-{k}.exr"), &mut normal_pages),
+            (
+                &d.occlusion,
+                format!("occlusion-{k}.exr"),
+                &mut occlusion_pages,
+            ),
+        ] {
+            let p = dir.join(&name);
+            img.write(&p, LdrSettings::default())
+                .map_err(|e| io_err(&p, e))?;
+            list.push(name);
+        }
+    }
     let m = ShManifest {
         format: SH_FORMAT.into(),
         version: 1,
@@ -697,6 +778,8 @@ pub fn write_sh(
         seconds,
         detail: sl.detail,
         shooting: sl.shooting,
+        normal_pages,
+        occlusion_pages,
         compressed: match compressed {
             Some(c) => Some(crate::sh_compress::write_compressed(c, dir)?),
             None => None,
@@ -783,6 +866,7 @@ pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crat
         settings: m.transfer,
         detail: m.detail,
         shooting: m.shooting,
+        detail_pages: vec![],
     })
 }
 

@@ -405,6 +405,12 @@ fn sh_lightmap_folder_round_trips() {
     .unwrap();
     let m = write_sh(&sl, Some(&c), dir.path(), "cornell", 0.0).unwrap();
     assert_eq!(m.pages[0].len(), 6, "16 coefficients in 6 RGB images");
+    // Normal and occlusion maps beside the coefficients.
+    assert_eq!(m.normal_pages, ["normal-0.exr"]);
+    assert_eq!(m.occlusion_pages, ["occlusion-0.exr"]);
+    let occ = Image::read(&dir.path().join("occlusion-0.exr")).unwrap();
+    assert!(occ.data.iter().all(|v| (0.0..=1.0).contains(&v.x)));
+    assert!(occ.mean().x < 1.0 && occ.mean().x > 0.2, "{:?}", occ.mean());
     let back = read_sh(dir.path(), &scene).unwrap();
     // The compressed copy comes back exactly.
     let (_, cb) = lightlab_bake::prt::read_sh_with_compressed(dir.path(), &scene).unwrap();
@@ -498,10 +504,44 @@ fn textured_transfer_beats_per_vertex_on_the_decimated_mesh() {
             println!("detail projection: {st:?}");
             assert!(st.misses * 100 <= st.texels, "{st:?}");
         }
-        render_sh_lightmaps(&sl, &lighting, w, w, 0, 8).unwrap()
+        // The baked occlusion map over the knot's (instance 1) rectangle; its normal map
+        // holds unit normals.
+        let rect = sl.layout.instances[1].unwrap();
+        let page = &sl.detail_pages[rect.page as usize];
+        let size = glam::Vec2::new(page.occlusion.width as f32, page.occlusion.height as f32);
+        let lo = (glam::Vec2::from(rect.offset) * size).as_uvec2();
+        let hi = ((glam::Vec2::from(rect.offset) + glam::Vec2::from(rect.scale)) * size)
+            .as_uvec2()
+            .min(size.as_uvec2());
+        let mut ao = vec![];
+        for y in lo.y..hi.y {
+            for x in lo.x..hi.x {
+                let n = page.normal.get(x, y);
+                assert!((n.length() - 1.0).abs() < 1e-3, "normal {n}");
+                ao.push(page.occlusion.get(x, y).x);
+            }
+        }
+        (render_sh_lightmaps(&sl, &lighting, w, w, 0, 8).unwrap(), ao)
     };
-    let plain = textured(None);
-    let detailed = textured(Some(Default::default()));
+    let (plain, ao_plain) = textured(None);
+    let (detailed, ao_detail) = textured(Some(Default::default()));
+    let mean = |v: &[f32]| v.iter().map(|a| *a as f64).sum::<f64>() / v.len() as f64;
+    let differs = ao_plain
+        .iter()
+        .zip(&ao_detail)
+        .map(|(a, b)| (a - b).abs() as f64)
+        .sum::<f64>()
+        / ao_plain.len() as f64;
+    println!(
+        "knot occlusion map: mean decimated {:.3}, with high-poly detail {:.3}, mean |difference| {differs:.3}",
+        mean(&ao_plain),
+        mean(&ao_detail)
+    );
+    // The source's ridges and grooves show in the occlusion map texel by texel (not on average:
+    // grooves occlude more, ridge tops less than the smoothed tube).
+    assert_eq!(ao_plain.len(), ao_detail.len());
+    assert!(differs > 0.03, "mean |difference| {differs}");
+    assert!((0.1..0.9).contains(&mean(&ao_detail)));
     lightlab_core::image::Image::write(
         &detailed,
         &std::env::temp_dir().join("lightlab-prt-detail.png"),
