@@ -107,7 +107,11 @@ impl DetailProjector {
             .iter()
             .map(|inst| {
                 let src = scene.meshes[inst.mesh].detail_source?;
-                let mesh = scene.meshes[src].clone();
+                // Only the geometry matters (the projection treats the source as opaque).
+                let mesh = lightlab_scene::Mesh {
+                    material: 0,
+                    ..scene.meshes[src].clone()
+                };
                 let (lo, hi) = mesh
                     .positions
                     .iter()
@@ -123,8 +127,7 @@ impl DetailProjector {
                         mesh: 0,
                         transform: inst.transform,
                     }],
-                    materials: scene.materials.clone(),
-                    textures: scene.textures.clone(),
+                    materials: vec![Default::default()],
                     ..Default::default()
                 };
                 let accel = Accel::with_alpha_test(&alone, false);

@@ -513,7 +513,6 @@ pub fn bake_sh_lightmaps(
         _ => *s,
     };
     let mut computed = vec![];
-    let mut occlusion = vec![];
     for (k, (page, ok)) in texels.pages.iter().zip(&valid).enumerate() {
         if !progress("texel transfer", k, total_pages) {
             return Err(crate::BakeError::Cancelled);
@@ -555,8 +554,7 @@ pub fn bake_sh_lightmaps(
             .map(|sp| (sp.p + sp.ng * ray_eps(sp.p), sp.ns, sp.ng))
             .collect();
         let (tr, ao) = surface_transfer_ao(tscene, taccel, &pts, &direct_s, &sources)?;
-        computed.push((idx, surface, tr));
-        occlusion.push(ao);
+        computed.push((idx, surface, tr, ao));
     }
     progress("texel transfer", total_pages, total_pages);
     let mut shoot_stats = None;
@@ -564,7 +562,7 @@ pub fn bake_sh_lightmaps(
         // CaSHL: the bounces by shooting between all texels of all pages.
         let mut patches = vec![];
         let mut transfer = vec![];
-        for (k, (idx, surface, tr)) in computed.iter().enumerate() {
+        for (k, (idx, surface, tr, _)) in computed.iter().enumerate() {
             let page = &texels.pages[k];
             for (j, &i) in idx.iter().enumerate() {
                 let t = page.samples[i].as_ref().expect("filtered");
@@ -596,7 +594,7 @@ pub fn bake_sh_lightmaps(
         debug_assert_eq!(np, st.patches);
         shoot_stats = Some(st);
         let mut it = transfer.chunks_exact(nc);
-        for (k, (idx, _, tr)) in computed.iter_mut().enumerate() {
+        for (k, (idx, _, tr, _)) in computed.iter_mut().enumerate() {
             let page = &texels.pages[k];
             for (j, &i) in idx.iter().enumerate() {
                 if page.samples[i].as_ref().is_some_and(|t| t.area > 0.0) {
@@ -606,7 +604,7 @@ pub fn bake_sh_lightmaps(
         }
     }
     let mut detail_pages = vec![];
-    for (k, ((idx, surface, tr), ao)) in computed.iter().zip(&occlusion).enumerate() {
+    for (k, (idx, surface, tr, ao)) in computed.iter().enumerate() {
         let page = &texels.pages[k];
         let n = page.samples.len();
         // The baked normal (object space of the texel's instance) and occlusion, dilated.
@@ -809,9 +807,7 @@ pub fn read_sh_with_compressed(
     dir: &std::path::Path,
     scene: &Scene,
 ) -> Result<(ShLightmaps, Option<crate::sh_compress::CompressedSh>), crate::BakeError> {
-    let sl = read_sh(dir, scene)?;
-    let (path, text) = manifest_text(dir, "sh")?;
-    let m: ShManifest = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
+    let (sl, m) = read_sh_and_manifest(dir, scene)?;
     let c = match &m.compressed {
         Some(cm) => Some(crate::sh_compress::read_compressed(cm, dir, &sl)?),
         None => None,
@@ -821,6 +817,13 @@ pub fn read_sh_with_compressed(
 
 /// Read an SH light-map folder for `scene` (the unwrap is re-run and must match).
 pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crate::BakeError> {
+    Ok(read_sh_and_manifest(dir, scene)?.0)
+}
+
+fn read_sh_and_manifest(
+    dir: &std::path::Path,
+    scene: &Scene,
+) -> Result<(ShLightmaps, ShManifest), crate::BakeError> {
     let (path, text) = manifest_text(dir, "sh")?;
     let m: ShManifest = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
     if m.format != SH_FORMAT || m.version != 1 {
@@ -858,7 +861,7 @@ pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crat
         }
         pages.push(imgs);
     }
-    Ok(ShLightmaps {
+    let sl = ShLightmaps {
         scene,
         layout,
         bands: m.bands,
@@ -867,7 +870,8 @@ pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crat
         detail: m.detail,
         shooting: m.shooting,
         detail_pages: vec![],
-    })
+    };
+    Ok((sl, m))
 }
 
 /// The manifest of a baked per-vertex transfer folder (`lightlab bake --method prt`).

@@ -189,18 +189,7 @@ fn sample(
     let det = e1q.perp_dot(e2q);
     let dpdx = (e1w * e2q.y - e2w * e1q.y) / det;
     let dpdy = (e2w * e1q.x - e1w * e2q.x) / det;
-    let nm = inst.normal_matrix();
-    let mut ns = if mesh.normals.len() == mesh.positions.len() {
-        (nm * (mesh.normals[idx[0]] * bw[0]
-            + mesh.normals[idx[1]] * bw[1]
-            + mesh.normals[idx[2]] * bw[2]))
-            .normalize_or(ng)
-    } else {
-        ng
-    };
-    if ns.dot(ng) < 0.0 {
-        ns = -ns;
-    }
+    let ns = shading_normal(mesh, inst.normal_matrix(), idx, bw, ng);
     let uv = if mesh.uv0.len() == mesh.positions.len() {
         mesh.uv0[idx[0]] * bw[0] + mesh.uv0[idx[1]] * bw[1] + mesh.uv0[idx[2]] * bw[2]
     } else {
@@ -228,6 +217,27 @@ fn sample(
         dbdx: Vec2::new(e2q.y, -e1q.y) / det,
         dbdy: Vec2::new(-e2q.x, e1q.x) / det,
     }
+}
+
+/// The interpolated vertex normal of triangle `idx` at weights `bw` (world space through the
+/// normal matrix `nm`), turned to the front side of the geometric normal `ng`; `ng` for meshes
+/// without normals.
+fn shading_normal(
+    mesh: &lightlab_scene::Mesh,
+    nm: glam::Mat3,
+    idx: [usize; 3],
+    bw: [f32; 3],
+    ng: Vec3,
+) -> Vec3 {
+    let ns = if mesh.normals.len() == mesh.positions.len() {
+        (nm * (mesh.normals[idx[0]] * bw[0]
+            + mesh.normals[idx[1]] * bw[1]
+            + mesh.normals[idx[2]] * bw[2]))
+            .normalize_or(ng)
+    } else {
+        ng
+    };
+    if ns.dot(ng) < 0.0 { -ns } else { ns }
 }
 
 /// Fuchs §5.7: the texel's normal as the mean of `samples` normal-map normals at uniformly
@@ -261,17 +271,7 @@ pub fn normal_mapped_normal(
         let b = t.bary + t.dbdx * u.x + t.dbdy * u.y;
         let bw = [1.0 - b.x - b.y, b.x, b.y];
         let uv = mesh.uv0[idx[0]] * bw[0] + mesh.uv0[idx[1]] * bw[1] + mesh.uv0[idx[2]] * bw[2];
-        let mut ns = if mesh.normals.len() == mesh.positions.len() {
-            (nm * (mesh.normals[idx[0]] * bw[0]
-                + mesh.normals[idx[1]] * bw[1]
-                + mesh.normals[idx[2]] * bw[2]))
-                .normalize_or(t.ng)
-        } else {
-            t.ng
-        };
-        if ns.dot(t.ng) < 0.0 {
-            ns = -ns;
-        }
+        let ns = shading_normal(mesh, nm, idx, bw, t.ng);
         sum += lightlab_trace::render::normal_mapped(scene, inst, mesh, idx, bw, uv, ns, t.ng);
     }
     Some(sum.normalize_or(t.ns))

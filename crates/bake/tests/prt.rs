@@ -66,6 +66,25 @@ fn path_traced(scene: &Scene, w: u32, depth: u32) -> Image {
         .unwrap()
 }
 
+/// The path tracer's mean E/π over points (position, normal) of a white receiver, 2048 paths
+/// each, at most `depth` scattering events.
+fn tracer_mean_e(scene: &Scene, accel: &Accel, pts: &[(Vec3, Vec3)], depth: u32, seed: u64) -> f64 {
+    let tracer = PathTracer::new(scene, accel);
+    let rs = RenderSettings {
+        max_depth: depth,
+        min_depth: 0,
+        ..Default::default()
+    };
+    let mut sum = 0.0;
+    for (k, &(p, n)) in pts.iter().enumerate() {
+        let mut rng = Rng::new(seed, k as u64);
+        for _ in 0..2048 {
+            sum += tracer.surface_radiance(p, n, n, Vec3::ONE, &rs, &mut rng).x as f64;
+        }
+    }
+    sum / (2048.0 * pts.len() as f64)
+}
+
 fn uniform_sky(radiance: f32) -> Environment {
     Environment {
         image: Image::from_fn(16, 8, |_, _| Vec3::splat(radiance)),
@@ -200,22 +219,7 @@ fn interreflection_approaches_the_multi_bounce_reference() {
     assert_eq!(sources.len(), 3);
     let inter = mean(&point_transfer(&scene, &accel, &pts, &inter_s, &sources).unwrap());
     // The reference tracer's E/π at the same points: 1 scattering event (sky only) and 4.
-    let tracer = PathTracer::new(&scene, &accel);
-    let reference = |depth: u32| -> f64 {
-        let rs = RenderSettings {
-            max_depth: depth,
-            min_depth: 0,
-            ..Default::default()
-        };
-        let mut sum = 0.0;
-        for (k, &(p, n)) in pts.iter().enumerate() {
-            let mut rng = Rng::new(11, k as u64);
-            for _ in 0..2048 {
-                sum += tracer.surface_radiance(p, n, n, Vec3::ONE, &rs, &mut rng).x as f64;
-            }
-        }
-        sum / (2048.0 * pts.len() as f64)
-    };
+    let reference = |depth: u32| tracer_mean_e(&scene, &accel, &pts, depth, 11);
     let (ref1, ref4) = (reference(1), reference(4));
     println!(
         "floor E/π: shadowed {shadowed:.4} (tracer, sky only {ref1:.4}); \
@@ -345,22 +349,7 @@ fn shooting_converges_to_the_multi_bounce_reference() {
     let (shot, st) = mean_floor(TransferKind::Shooting(ShootSettings::default()));
     let st = st.expect("shooting reports its figures");
     let accel = Accel::new(&scene);
-    let tracer = PathTracer::new(&scene, &accel);
-    let reference = |depth: u32| -> f64 {
-        let rs = RenderSettings {
-            max_depth: depth,
-            min_depth: 0,
-            ..Default::default()
-        };
-        let mut sum = 0.0;
-        for (k, &(p, n)) in floor.iter().enumerate() {
-            let mut rng = Rng::new(12, k as u64);
-            for _ in 0..2048 {
-                sum += tracer.surface_radiance(p, n, n, Vec3::ONE, &rs, &mut rng).x as f64;
-            }
-        }
-        sum / (2048.0 * floor.len() as f64)
-    };
+    let reference = |depth: u32| tracer_mean_e(&scene, &accel, &floor, depth, 12);
     let (ref4, ref_all) = (reference(4), reference(32));
     println!(
         "open box floor E/π: shadowed {shadowed:.4}; gathered 3 bounces {gathered:.4} (tracer \

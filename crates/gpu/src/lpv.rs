@@ -237,19 +237,10 @@ pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)>
     for l in &scene.lights {
         let colour = l.color * l.intensity;
         // A square perspective view of half-angle `half` from `eye` along `d` (kind 1).
-        let spot_view = |eye: Vec3, d: Vec3, half: f32| {
-            let far = far_from(eye).max(1e-3);
-            let view = look_to_mat4(eye, d, up_for(d));
-            let proj = directx::perspective(2.0 * half, 1.0, far * 1e-4, far);
-            RsmLight {
-                view_proj: (proj * view).to_cols_array_2d(),
-                eye: eye.to_array(),
-                kind: 1,
-                axis: d.to_array(),
-                texel: (2.0 * half.tan() / size as f32).powi(2),
-                color: colour.to_array(),
-                ..Default::default()
-            }
+        let spot_view = |eye: Vec3, d: Vec3, half: f32| RsmLight {
+            kind: 1,
+            color: colour.to_array(),
+            ..square_view(eye, d, up_for(d), half, far_from(eye), size)
         };
         match l.kind {
             LightKind::Directional { .. } => {
@@ -367,15 +358,24 @@ fn camera_view(camera: &lightlab_scene::Camera, aspect: f32, grid: &Grid, size: 
     let half = (t * aspect.max(1.0)).atan().min(1.48);
     let centre = grid.origin + Vec3::splat(0.5 * grid.cell * grid.n as f32);
     let far = (eye - centre).length() + 0.87 * grid.cell * grid.n as f32;
-    let view = look_to_mat4(eye, forward, up);
-    let proj = directx::perspective(2.0 * half, 1.0, far.max(1e-3) * 1e-4, far.max(1e-3));
+    RsmLight {
+        kind: 3,
+        color: [0.0; 3],
+        ..square_view(eye, forward, up, half, far, size)
+    }
+}
+
+/// A square perspective RSM view of half-angle `half` from `eye` along `d` reaching `far`, with
+/// the solid angle of one of its `size`² texels at the centre.
+fn square_view(eye: Vec3, d: Vec3, up: Vec3, half: f32, far: f32, size: u32) -> RsmLight {
+    let far = far.max(1e-3);
+    let view = look_to_mat4(eye, d, up);
+    let proj = directx::perspective(2.0 * half, 1.0, far * 1e-4, far);
     RsmLight {
         view_proj: (proj * view).to_cols_array_2d(),
         eye: eye.to_array(),
-        kind: 3,
-        axis: forward.to_array(),
+        axis: d.to_array(),
         texel: (2.0 * half.tan() / size as f32).powi(2),
-        color: [0.0; 3],
         ..Default::default()
     }
 }
