@@ -82,6 +82,11 @@ pub struct RasterArgs {
     /// seen (the path tracer draws it, so the default keeps renders comparable).
     #[arg(long)]
     pub no_background: bool,
+    /// Do not light with the scene's planar emitters as area lights (cornell's lamp): only its
+    /// punctual lights light the surfaces directly. Light-map and SH techniques never use them
+    /// (their bakes hold that light).
+    #[arg(long)]
+    pub no_area_lights: bool,
 }
 
 impl Default for RasterArgs {
@@ -100,6 +105,7 @@ impl Default for RasterArgs {
             pcf: 1,
             ssaa: 1,
             no_background: false,
+            no_area_lights: false,
         }
     }
 }
@@ -191,6 +197,7 @@ pub fn settings(
             w
         },
         background: !a.no_background,
+        area_lights: !a.no_area_lights,
         ..Default::default()
     })
 }

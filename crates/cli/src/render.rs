@@ -243,6 +243,15 @@ fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
             crate::lpv_cmd::LPV_TECHNIQUES.join(", ")
         );
     }
+    if a.raster.no_area_lights
+        && (crate::bake_cmd::LIGHTMAP_TECHNIQUES.contains(&t)
+            || crate::prt_cmd::SH_TECHNIQUES.contains(&t))
+    {
+        bail!(
+            "--no-area-lights applies to the Phong and LPV techniques; {t} never lights with \
+             emitters as area lights (its bake holds their light)"
+        );
+    }
     let ctx = crate::raster_cmd::context()?;
     let (w, h) = (a.width, a.height.unwrap_or(a.width));
     let t0 = Instant::now();

@@ -296,29 +296,8 @@ pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)>
             }
         }
     }
-    for inst in &scene.instances {
-        let mesh = &scene.meshes[inst.mesh];
-        let emission = scene.materials[mesh.material].emission();
-        if emission.max_element() <= 0.0 {
-            continue;
-        }
-        let (mut area, mut na, mut ca) = (0.0f32, Vec3::ZERO, Vec3::ZERO);
-        for t in mesh.indices.chunks_exact(3) {
-            let p = [0, 1, 2].map(|k| {
-                inst.transform
-                    .transform_point3(mesh.positions[t[k] as usize])
-            });
-            let c = (p[1] - p[0]).cross(p[2] - p[0]);
-            let a = 0.5 * c.length();
-            area += a;
-            na += 0.5 * c;
-            ca += a * (p[0] + p[1] + p[2]) / 3.0;
-        }
-        if area <= 0.0 || na.length() < 0.5 * area {
-            continue;
-        }
-        let n = na.normalize();
-        let c = ca / area;
+    for e in scene.planar_emitters() {
+        let (n, c, area, emission) = (e.normal, e.centre, e.area, e.radiance);
         let eye = c + n * (1e-3 * grid.cell);
         let far = far_from(eye).max(1e-3);
         let view = look_to_mat4(eye, n, up_for(n));

@@ -23,7 +23,8 @@ use bytemuck::Zeroable;
 use glam::camera::rh::proj::directx;
 use glam::{Mat4, Vec3, Vec4};
 use lightlab_core::image::Image;
-use lightlab_scene::{Camera, LightKind, Scene};
+use lightlab_scene::emitters::PlanarEmitter;
+use lightlab_scene::{Camera, Light, LightKind, Scene};
 use std::collections::BTreeMap;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
@@ -282,6 +283,11 @@ pub struct RasterSettings {
     /// Draw the scene's environment map where no surface is seen, as the path tracer does
     /// (so that renders compare pixel by pixel); false leaves the background black.
     pub background: bool,
+    /// Light with the scene's planar emitters as Lambertian rectangle lights (after its
+    /// punctual lights; at most [`MAX_AREA_LIGHTS`], brightest first). Renderers built
+    /// `with_lightmap` (a light-map already holds the emitters' light) or `with_sh` (lit by
+    /// their SH light alone) ignore it.
+    pub area_lights: bool,
 }
 
 impl Default for RasterSettings {
@@ -307,8 +313,18 @@ impl Default for RasterSettings {
             exposure: 1.0,
             wind: Default::default(),
             background: true,
+            area_lights: true,
         }
     }
+}
+
+/// At most this many emitters become area lights (each costs a light's passes and shadows).
+pub const MAX_AREA_LIGHTS: usize = 8;
+
+/// How far an area light's point for shadows sits in front of its emitter: 1 % of the
+/// emitter's size, so that the emitter (and a ceiling it is mounted on) lies behind it.
+fn area_light_offset(e: &PlanarEmitter) -> f32 {
+    (0.01 * e.area.sqrt()).max(1e-5)
 }
 
 /// Errors of the renderer.
@@ -863,9 +879,43 @@ impl Renderer {
         } else {
             None
         };
-        for (li, l) in scene.lights.iter().enumerate() {
-            let radius = lights::light_radius(l, s.attenuation, s.light_radius);
+        // The scene's lights, then (when enabled) its planar emitters as area lights: each a
+        // point light at the emitter's centre, moved off it along its normal, for the shadows,
+        // and a Lambertian rectangle for the shading (kind 3).
+        let mut sources: Vec<(Light, Option<PlanarEmitter>)> =
+            scene.lights.iter().map(|l| (l.clone(), None)).collect();
+        // A light-map holds the emitters' light already; SH transfer is lit by its SH light only.
+        if s.area_lights && lightmap.is_none() && sh.is_none() {
+            for e in scene.planar_emitters().into_iter().take(MAX_AREA_LIGHTS) {
+                let offset = area_light_offset(&e);
+                let l = Light {
+                    name: format!("emitter {}", e.instance),
+                    kind: LightKind::Point,
+                    color: e.radiance,
+                    intensity: e.area,
+                    position: e.centre + e.normal * offset,
+                    direction: e.normal,
+                    range: None,
+                };
+                sources.push((l, Some(e)));
+            }
+        }
+        for (li, (l, area)) in sources.iter().enumerate() {
+            let radius = match area {
+                None => lights::light_radius(l, s.attenuation, s.light_radius),
+                // Area lights fall off physically (their exact irradiance): never culled.
+                Some(_) => None,
+            };
             let mut g = lights::gpu_light(l, s.attenuation, radius);
+            if let Some(e) = area {
+                g.kind = 3;
+                g.attenuation = 0;
+                g.atten_scale = 1.0;
+                g.edge_u = e.half_u.to_array();
+                g.edge_v = e.half_v.to_array();
+                g.area_offset = area_light_offset(e);
+                g.two_sided = e.double_sided as u32;
+            }
             let first = views.len();
             if s.shadows.map() {
                 match l.kind {
@@ -937,7 +987,7 @@ impl Renderer {
             wind_a: s.wind.uniform()[0],
             wind_b: s.wind.uniform()[1],
             viewport: [s.width as f32, s.height as f32],
-            light_count: scene.lights.len() as u32,
+            light_count: light_pos.len() as u32,
             shadow_mode: match s.shadows {
                 ShadowMethod::Map => 1,
                 ShadowMethod::MapLinear => 2,
@@ -1464,7 +1514,6 @@ impl Renderer {
         Ok(())
     }
 
-    /// Number of scene lights rendered.
     /// The linear HDR colour target of the last frame (Rgba16Float, `width`×`height`), for a
     /// viewer's own display pass.
     pub fn hdr_view(&self) -> &wgpu::TextureView {
@@ -1476,6 +1525,7 @@ impl Renderer {
         &self.camera
     }
 
+    /// Number of lights rendered (the scene's, then its area lights).
     pub fn light_count(&self) -> usize {
         self.light_pos.len()
     }

@@ -58,7 +58,10 @@ pub struct FrameUniforms {
     pub wind_b: [f32; 4],
 }
 
-/// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional.
+/// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional, 3 area (an emissive
+/// instance as a Lambertian rectangle: `position` its centre moved `area_offset` along its
+/// normal `direction`, corners centre ± `edge_u` ± `edge_v`, `color` its radiance, `intensity`
+/// its area).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuLight {
@@ -78,6 +81,10 @@ pub struct GpuLight {
     pub _pad0: u32,
     pub _pad1: u32,
     pub cascade_ends: [f32; 4],
+    pub edge_u: [f32; 3],
+    pub area_offset: f32,
+    pub edge_v: [f32; 3],
+    pub two_sided: u32,
 }
 
 /// One shadow-map layer (WGSL `ShadowView`).
@@ -196,7 +203,11 @@ mod tests {
                     shadow_count,
                     _pad0,
                     _pad1,
-                    cascade_ends
+                    cascade_ends,
+                    edge_u,
+                    area_offset,
+                    edge_v,
+                    two_sided,
                 ),
             ),
             (

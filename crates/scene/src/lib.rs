@@ -7,6 +7,7 @@
 #![forbid(unsafe_code)]
 
 pub mod builtin;
+pub mod emitters;
 pub mod gltf_io;
 pub mod model;
 pub mod simplify;

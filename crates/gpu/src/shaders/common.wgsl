@@ -62,7 +62,9 @@ struct FrameUniforms {
     wind_b: vec4<f32>,
 }
 
-// One light. kind: 0 point, 1 spot, 2 directional. Spot cones as cosines.
+// One light. kind: 0 point, 1 spot, 2 directional, 3 area (a Lambertian rectangle: centre
+// position − area_offset·direction, normal direction, corners centre ± edge_u ± edge_v,
+// radiance color, area intensity). Spot cones as cosines.
 // attenuation: 0 inverse square (glTF range window), 1..4 Fuchs (2005) §4.1 atten₁..atten₄.
 struct GpuLight {
     position: vec3<f32>,
@@ -84,6 +86,10 @@ struct GpuLight {
     _pad1: u32,
     // View-space distances ending the cascades of a directional light.
     cascade_ends: vec4<f32>,
+    edge_u: vec3<f32>,
+    area_offset: f32,
+    edge_v: vec3<f32>,
+    two_sided: u32,
 }
 
 // One rendered shadow-map layer.
@@ -190,6 +196,16 @@ fn ggx_lambda(c: f32, a: f32) -> f32 {
     return 0.5 * (-1.0 + sqrt(1.0 + a * a * t2));
 }
 
+// The diffuse part of the BRDF (constant in l): albedo·(1 − transmission)/π, less what the
+// dielectric coat reflects at the view angle (model 0).
+fn diffuse_coef(s: Surface, nv: f32) -> vec3<f32> {
+    var kd = 1.0;
+    if s.model == 0u && s.f0d > 0.0 {
+        kd = 1.0 - schlick(nv, vec3<f32>(s.f0d)).x;
+    }
+    return s.diffuse * (kd * (1.0 - s.transmission) / PI);
+}
+
 // f(v, l)·⟨n,l⟩ for the front side, the same models as the path tracer (`trace::bsdf`).
 fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     let nl = dot(s.n, l);
@@ -197,11 +213,7 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     if nl <= 0.0 || nv <= 0.0 {
         return vec3<f32>(0.0);
     }
-    var kd = 1.0;
-    if s.model == 0u && s.f0d > 0.0 {
-        kd = 1.0 - schlick(nv, vec3<f32>(s.f0d)).x;
-    }
-    var f = s.diffuse * (kd * (1.0 - s.transmission) / PI);
+    var f = diffuse_coef(s, nv);
     if s.model == 1u || all(s.f0 <= vec3<f32>(0.0)) {
         return f * nl;
     }
@@ -283,8 +295,89 @@ fn light_dir(li: GpuLight, p: vec3<f32>) -> vec3<f32> {
     return normalize(li.position - p);
 }
 
+// Irradiance at p (normal n) from a rectangle light of unit radiance: Lambert's polygon
+// formula E = ½·Σᵢ θᵢ·(γ̂ᵢ·n) (θᵢ the angle each edge subtends, γ̂ᵢ its plane's normal), exact
+// for a diffuse receiver, with the rectangle first clipped to the hemisphere above n
+// (Sutherland–Hodgman: at most five vertices).
+fn rect_irradiance(li: GpuLight, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let c = li.position - li.direction * li.area_offset - p;
+    let q = array<vec3<f32>, 4>(
+        c - li.edge_u - li.edge_v,
+        c + li.edge_u - li.edge_v,
+        c + li.edge_u + li.edge_v,
+        c - li.edge_u + li.edge_v,
+    );
+    var o: array<vec3<f32>, 5>;
+    var m = 0u;
+    for (var i = 0u; i < 4u; i++) {
+        let a = q[i];
+        let b = q[(i + 1u) % 4u];
+        let da = dot(a, n);
+        let db = dot(b, n);
+        if da >= 0.0 {
+            o[m] = a;
+            m++;
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            o[m] = a + (b - a) * (da / (da - db));
+            m++;
+        }
+    }
+    if m < 3u {
+        return 0.0;
+    }
+    var sum = 0.0;
+    for (var i = 0u; i < m; i++) {
+        let a = o[i];
+        let b = o[(i + 1u) % m];
+        let la = length(a);
+        let lb = length(b);
+        if la < 1e-9 || lb < 1e-9 {
+            continue;
+        }
+        let cr = cross(a, b) / (la * lb);
+        let sn = length(cr);
+        if sn > 1e-9 {
+            // atan2 keeps small angles (far lights) accurate, where acos of a dot would not.
+            sum += atan2(sn, dot(a, b) / (la * lb)) * dot(cr / sn, n);
+        }
+    }
+    return 0.5 * abs(sum);
+}
+
+// Radiance towards the viewer from an area light: diffuse reflection and transmission from
+// the exact irradiance of the rectangle, specular from its centre as a point light of
+// intensity L·A·cosθ (Lambertian).
+fn shade_area(s: Surface, li: GpuLight, v: vec3<f32>) -> vec3<f32> {
+    let c = li.position - li.direction * li.area_offset;
+    if dot(s.p - c, li.direction) <= 0.0 && li.two_sided == 0u {
+        return vec3<f32>(0.0);
+    }
+    let to = c - s.p;
+    let d2 = max(dot(to, to), 1e-12);
+    let l = to * inverseSqrt(d2);
+    var out = vec3<f32>(0.0);
+    let nv = dot(s.n, v);
+    if nv > 0.0 {
+        out += diffuse_coef(s, nv) * rect_irradiance(li, s.p, s.n);
+        if dot(s.ng, l) > 0.0 {
+            var spec = s;
+            spec.diffuse = vec3<f32>(0.0);
+            out += brdf_cos(spec, v, l) * (li.intensity * abs(dot(li.direction, l)) / d2);
+        }
+    }
+    if s.transmission > 0.0 {
+        // Thin diffuse transmission: light reaching the back side leaves towards the viewer.
+        out += s.diffuse * (s.transmission / PI) * rect_irradiance(li, s.p, -s.n);
+    }
+    return out * li.color;
+}
+
 // Radiance towards the viewer from one light (visibility not included).
 fn shade_light(s: Surface, li: GpuLight, v: vec3<f32>) -> vec3<f32> {
+    if li.kind == 3u {
+        return shade_area(s, li, v);
+    }
     let l = light_dir(li, s.p);
     let e = light_incidence(li, s.p).x;
     if e <= 0.0 {

@@ -443,7 +443,8 @@ fn ambient(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
 
 fn shadow_view_index(li: GpuLight, p: vec3<f32>) -> u32 {
     var i = li.shadow_first;
-    if li.kind == 0u {
+    // Point and area lights: six cube faces around the light's position.
+    if li.kind == 0u || li.kind == 3u {
         let d = p - li.position;
         let a = abs(d);
         if a.x >= a.y && a.x >= a.z {
