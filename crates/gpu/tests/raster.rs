@@ -463,7 +463,10 @@ fn an_emissive_rectangle_lights_like_the_path_tracer() {
         Vec3::new(3.0, 0.0, 3.0),
         Vec3::new(-3.0, 0.0, 3.0),
     ];
-    s.add_mesh(quad_facing("floor", floor, Vec3::Y, white), glam::Mat4::IDENTITY);
+    s.add_mesh(
+        quad_facing("floor", floor, Vec3::Y, white),
+        glam::Mat4::IDENTITY,
+    );
     // 0.5 m × 0.3 m, centred 0.1 m up, facing down and towards +z (tilted 60°): its lower
     // edge is 3 cm below the floor, which clips it for floor points near it.
     let place = glam::Mat4::from_translation(Vec3::new(0.0, 0.1, 0.0))
@@ -507,7 +510,10 @@ fn an_emissive_rectangle_lights_like_the_path_tracer() {
     // Measured 0.0011 and 0.998 (session 9): what is left is the reference's noise.
     assert!(e <= 0.003, "relMSE {e}");
     assert!((ratio - 1.0).abs() < 0.01, "mean ratio {ratio}");
-    assert!(ratio_off < 0.5, "without area lights only the lamp is seen: {ratio_off}");
+    assert!(
+        ratio_off < 0.5,
+        "without area lights only the lamp is seen: {ratio_off}"
+    );
 }
 
 /// Cornell's lamp is geometry: the GPU techniques light the box with it, shadowed from its
@@ -539,7 +545,10 @@ fn cornell_is_lit_by_its_lamp() {
         } else {
             // Measured 0.0025 and 1.001 (session 9).
             assert!(e <= 0.006, "{shadows:?}: relMSE {e}");
-            assert!((ratio - 1.0).abs() < 0.02, "{shadows:?}: mean ratio {ratio}");
+            assert!(
+                (ratio - 1.0).abs() < 0.02,
+                "{shadows:?}: mean ratio {ratio}"
+            );
         }
     }
 }
