@@ -49,6 +49,13 @@ impl DebugView {
     }
 }
 
+/// `--lpv-reemit`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ReemitArg {
+    Central,
+    Face,
+}
+
 /// Options of the LPV techniques.
 #[derive(Args, Clone, Debug)]
 pub struct LpvArgs {
@@ -76,6 +83,11 @@ pub struct LpvArgs {
     /// (shows the flicker that snapping prevents).
     #[arg(long)]
     pub no_lpv_snap: bool,
+    /// `lpv`: how light crossing a cell's side faces is re-emitted: `central` along the
+    /// direction it travelled (keeps it going; the default), `face` around the face's normal
+    /// (Kaplanyan & Dachsbacher's original, more diffusive).
+    #[arg(long, value_enum, default_value_t = ReemitArg::Central)]
+    pub lpv_reemit: ReemitArg,
     /// What to show: the final frame or the volume's indirect light only.
     #[arg(long, value_enum, default_value_t = DebugView::Final)]
     pub debug_view: DebugView,
@@ -91,6 +103,7 @@ impl Default for LpvArgs {
             lpv_damping: 2.0,
             lpv_cascades: 1,
             no_lpv_snap: false,
+            lpv_reemit: ReemitArg::Central,
             debug_view: DebugView::Final,
         }
     }
@@ -111,6 +124,10 @@ impl LpvArgs {
             damping: self.lpv_damping,
             cascades: self.lpv_cascades,
             snap: !self.no_lpv_snap,
+            reemit: match self.lpv_reemit {
+                ReemitArg::Central => lightlab_core::lpv::Reemit::Central,
+                ReemitArg::Face => lightlab_core::lpv::Reemit::FaceNormal,
+            },
             ..Default::default()
         };
         s.validate().map_err(|e| anyhow::anyhow!("{e}"))?;

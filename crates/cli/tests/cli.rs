@@ -1057,11 +1057,12 @@ fn lpv_techniques_render_and_reject_bad_options() {
     assert!(o.status.success(), "{}", stderr(&o));
     std::fs::remove_file(&out).unwrap();
     // Options of other techniques are refused, not ignored.
-    let refused: [&[&str]; 4] = [
+    let refused: [&[&str]; 5] = [
         &["phong", "--debug-view", "indirect"],
         &["lpv", "--indirect-only"],
         &["phong-shadow-maps", "--bounces", "2"],
         &["lightmap", "--no-area-lights"],
+        &["lpv-faithful", "--lpv-reemit", "face"],
     ];
     for args in refused {
         let mut v = vec!["render", "--scene", "cornell", "--technique"];

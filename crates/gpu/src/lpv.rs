@@ -23,7 +23,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use glam::camera::rh::proj::directx;
 use glam::camera::rh::view::look_to_mat4;
-use lightlab_core::lpv::Grid;
+use lightlab_core::lpv::{self, Grid};
 use lightlab_scene::{LightKind, Scene};
 use wgpu::util::DeviceExt;
 
@@ -82,6 +82,10 @@ pub struct LpvSettings {
     /// Place the cascades for this eye position and view direction instead of the render
     /// camera's (e.g. around a player, or to test a moved camera against a fixed view).
     pub anchor: Option<(Vec3, Vec3)>,
+    /// How the light crossing a receiving cell's side faces is re-emitted (Kaplanyan only):
+    /// `Central` (default) keeps its direction, `FaceNormal` is Kaplanyan & Dachsbacher's
+    /// original (see `lightlab_core::lpv::Reemit`).
+    pub reemit: lpv::Reemit,
 }
 
 impl Default for LpvSettings {
@@ -99,6 +103,7 @@ impl Default for LpvSettings {
             snap: true,
             camera_blockers: true,
             anchor: None,
+            reemit: lpv::Reemit::Central,
         }
     }
 }
@@ -147,6 +152,13 @@ impl LpvSettings {
                 "lpv-faithful has a single volume (the report's); cascades need lpv".into(),
             );
         }
+        if self.reemit != lpv::Reemit::Central && self.scheme == LpvScheme::Wpi {
+            return Err(
+                "lpv-faithful propagates with the report's 18-neighbour kernel; the re-emission \
+                 of the 6-face scheme applies to lpv"
+                    .into(),
+            );
+        }
         if !(self.margin.is_finite() && (0.0..=self.grid as f32 / 4.0).contains(&self.margin)) {
             return Err("LPV margin must be within 0..=grid/4 cells".into());
         }
@@ -192,7 +204,9 @@ pub struct LpvUniforms {
     pub occlusion: u32,
     /// First z texel of this cascade in the stacked 3D textures.
     pub layer: u32,
-    pub pad0: u32,
+    /// Side faces' re-emission: 0 around the face normal (Kaplanyan), 1 along the light's
+    /// direction (`lightlab_core::lpv::Reemit`).
+    pub reemit: u32,
     pub pad1: u32,
     pub pad2: u32,
     /// Wind sway (lightlab_core::wind::Wind::uniform), the same as the camera passes'.
@@ -451,6 +465,7 @@ impl Lpv {
             wpi_samples: settings.wpi_samples,
             store_last: (settings.scheme == LpvScheme::Wpi) as u32,
             occlusion: 0,
+            reemit: (settings.reemit == lpv::Reemit::Central) as u32,
             wind_a: wind.uniform()[0],
             wind_b: wind.uniform()[1],
             ..Default::default()
@@ -1021,7 +1036,7 @@ mod tests {
                 store_last,
                 occlusion,
                 layer,
-                pad0,
+                reemit,
                 pad1,
                 pad2,
                 wind_a,

@@ -34,7 +34,9 @@ struct LpvUniforms {
     occlusion: u32,
     // First z texel of this cascade in the stacked 3D textures.
     layer: u32,
-    pad0: u32,
+    // Side faces' re-emission: 0 a cosine lobe around the face normal (Kaplanyan), 1 around
+    // the direction the light travelled (lightlab_core::lpv::Reemit).
+    reemit: u32,
     pad1: u32,
     pad2: u32,
     // Wind sway, as FrameUniforms.
@@ -312,8 +314,9 @@ fn transmittance(c: vec3<i32>, axis: vec3<i32>, dir: vec3<f32>) -> f32 {
     return 1.0 - clamp(0.25 * b, 0.0, 1.0);
 }
 
-// Kaplanyan: gather from the 6 face neighbours onto the 5 faces of this cell; the new light goes
-// to `dst` and is added to the accumulation.
+// Kaplanyan: gather from the 6 face neighbours onto the 5 faces of this cell, each face's flux
+// re-emitted as a cosine lobe around the face normal or (reemit = 1) around the direction it
+// arrived from; the new light goes to `dst` and is added to the accumulation.
 @compute @workgroup_size(4, 4, 4)
 fn propagate_cs(@builtin(global_invocation_id) id: vec3<u32>) {
     let nn = i32(lpv.n);
@@ -352,7 +355,7 @@ fn propagate_cs(@builtin(global_invocation_id) id: vec3<u32>) {
             let sv = vec3<f32>(axis_of(j));
             let w = normalize(dv + 0.5 * sv);
             let y = sh_basis(w);
-            let l = cosine_lobe(sv) * (t * SOLID_SIDE / PI);
+            let l = cosine_lobe(select(sv, w, lpv.reemit == 1u)) * (t * SOLID_SIDE / PI);
             for (var ch = 0; ch < 3; ch++) {
                 acc[ch] += l * dot(source[ch], y);
             }
