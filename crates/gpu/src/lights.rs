@@ -127,7 +127,7 @@ impl ShadowProjection {
             texel_scale: self.texel_scale,
             ortho: self.ortho as u32,
             far: self.far,
-            _pad: 0.0,
+            near: if self.ortho { 0.0 } else { SHADOW_NEAR },
         }
     }
 }

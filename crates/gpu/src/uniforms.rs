@@ -95,7 +95,8 @@ pub struct ShadowView {
     pub texel_scale: f32,
     pub ortho: u32,
     pub far: f32,
-    pub _pad: f32,
+    /// Near distance of a perspective view (linearises its depth for soft shadows).
+    pub near: f32,
 }
 
 /// Per-pass constants (WGSL `PassUniforms`), one 256-byte slot each (dynamic offsets).
@@ -212,7 +213,7 @@ mod tests {
             ),
             (
                 "ShadowView",
-                rust_layout!(ShadowView, view_proj, texel_scale, ortho, far, _pad),
+                rust_layout!(ShadowView, view_proj, texel_scale, ortho, far, near),
             ),
             (
                 "PassUniforms",

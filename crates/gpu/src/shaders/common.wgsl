@@ -100,7 +100,8 @@ struct ShadowView {
     ortho: u32,
     // Far distance of a perspective view (normalises Heidrich's linear depth).
     far: f32,
-    _pad: f32,
+    // Near distance of a perspective view (linearises its depth for soft shadows).
+    near: f32,
 }
 
 // Per-pass constants, addressed with a dynamic offset.

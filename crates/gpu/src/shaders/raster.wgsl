@@ -467,6 +467,104 @@ fn shadow_view_index(li: GpuLight, p: vec3<f32>) -> u32 {
     return i;
 }
 
+// Distance along the view axis of a perspective shadow view's stored depth (directx
+// projection: z = f·(d − n) / (d·(f − n))).
+fn shadow_linear_depth(sv: ShadowView, z: f32) -> f32 {
+    return sv.near * sv.far / max(sv.far - z * (sv.far - sv.near), 1e-9);
+}
+
+// Shadow-map coordinates (uv, depth) of a world point.
+fn shadow_uvz(sv: ShadowView, x: vec3<f32>) -> vec3<f32> {
+    let c = sv.view_proj * vec4<f32>(x, 1.0);
+    let n = c.xyz / max(c.w, 1e-9);
+    return vec3<f32>(n.x * 0.5 + 0.5, 0.5 - n.y * 0.5, n.z);
+}
+
+const AREA_SEARCH_TAPS: u32 = 16u;
+const AREA_FILTER_TAPS: u32 = 32u;
+const GOLDEN_ANGLE: f32 = 2.3999632;
+
+// Tap i of n on a unit disc (Vogel's spiral), turned by phi.
+fn disc_tap(i: u32, n: u32, phi: f32) -> vec2<f32> {
+    let r = sqrt((f32(i) + 0.5) / f32(n));
+    let a = f32(i) * GOLDEN_ANGLE + phi;
+    return r * vec2<f32>(cos(a), sin(a));
+}
+
+// Soft shadows of an area light from the shadow map of its centre: percentage-closer soft
+// shadows (Fernando 2005). The emitter is a disc of its area (radius R). A blocker search over
+// the region from which blockers could hide part of the light gives the mean blocker depth d_b;
+// the penumbra at receiver depth d_r then spans R·(d_r − d_b)/(d_r·d_b) texel-scales, and PCF
+// over that disc gives the visible fraction. Each tap compares against the receiver's own
+// plane (its depth gradient in the map, from two tangent points), so wide kernels on surfaces
+// slanted to the light do not shadow themselves. Taps are a spiral turned per point (noise
+// instead of banding). Limits: taps beyond a cube face's edge read the face's border.
+fn area_shadow(
+    li: GpuLight,
+    vi: u32,
+    sv: ShadowView,
+    q: vec3<f32>,
+    ng: vec3<f32>,
+    uv: vec2<f32>,
+    z: f32,
+) -> f32 {
+    let radius = sqrt(li.intensity / PI);
+    let d_r = shadow_linear_depth(sv, z);
+    let ts = sv.texel_scale;
+    let inv = 1.0 / frame.shadow_size;
+    // Receiver plane: dz/duv from points one texel away along two tangents.
+    var t1 = cross(ng, vec3<f32>(0.0, 1.0, 0.0));
+    if dot(t1, t1) < 1e-4 {
+        t1 = cross(ng, vec3<f32>(1.0, 0.0, 0.0));
+    }
+    t1 = normalize(t1);
+    let t2 = cross(ng, t1);
+    let e = ts * d_r;
+    let p1 = shadow_uvz(sv, q + t1 * e);
+    let p2 = shadow_uvz(sv, q + t2 * e);
+    let a = p1.xy - uv;
+    let b = p2.xy - uv;
+    let det = a.x * b.y - a.y * b.x;
+    var grad = vec2<f32>(0.0);
+    if abs(det) > 1e-3 * inv * inv {
+        let dz1 = p1.z - z;
+        let dz2 = p2.z - z;
+        grad = vec2<f32>(b.y * dz1 - a.y * dz2, a.x * dz2 - b.x * dz1) / det;
+    }
+    let phi = 6.2831853 * fract(sin(dot(q, vec3<f32>(12.9898, 78.233, 37.719))) * 43758.547);
+    let cap = 0.15;
+    // Blockers between a quarter of the receiver's depth and the receiver can hide the light.
+    let d_min = max(sv.near, 0.25 * d_r);
+    let search = min(radius * (d_r - d_min) / (d_r * ts * d_min) * inv, cap);
+    let size = i32(frame.shadow_size);
+    var blockers = 0.0;
+    var depth_sum = 0.0;
+    for (var i = 0u; i < AREA_SEARCH_TAPS; i++) {
+        let o = disc_tap(i, AREA_SEARCH_TAPS, phi) * search;
+        let t = clamp(vec2<i32>((uv + o) * frame.shadow_size), vec2<i32>(0), vec2<i32>(size - 1));
+        let stored = textureLoad(shadow_depth, t, i32(vi), 0);
+        if stored < z + dot(grad, o) {
+            blockers += 1.0;
+            depth_sum += shadow_linear_depth(sv, stored);
+        }
+    }
+    if blockers == 0.0 {
+        return 1.0;
+    }
+    let d_b = depth_sum / blockers;
+    let k = clamp(
+        radius * max(d_r - d_b, 0.0) / (d_r * ts * max(d_b, sv.near)) * inv,
+        f32(max(frame.pcf_radius, 1)) * inv,
+        cap,
+    );
+    var lit = 0.0;
+    for (var i = 0u; i < AREA_FILTER_TAPS; i++) {
+        let o = disc_tap(i, AREA_FILTER_TAPS, phi) * k;
+        lit += textureSampleCompareLevel(shadow_depth, shadow_cmp, uv + o, i32(vi), z + dot(grad, o));
+    }
+    return lit / f32(AREA_FILTER_TAPS);
+}
+
 // Fraction of the light that reaches p (1 = lit), from the light's shadow maps.
 fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
     if li.shadow_count == 0u || frame.shadow_mode == 0u {
@@ -488,6 +586,9 @@ fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
     if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) || ndc.z > 1.0 {
         return 1.0;
+    }
+    if li.kind == 3u && frame.shadow_mode == 1u && sv.ortho == 0u {
+        return area_shadow(li, vi, sv, q, ng, uv, ndc.z);
     }
     let r = frame.pcf_radius;
     let inv = 1.0 / frame.shadow_size;
