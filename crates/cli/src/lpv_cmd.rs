@@ -65,9 +65,11 @@ pub struct LpvArgs {
     /// Propagation steps (default: 8 for `lpv`, 2 for `lpv-faithful`).
     #[arg(long)]
     pub lpv_iterations: Option<u32>,
-    /// Reflective-shadow-map side in texels.
-    #[arg(long, default_value_t = 256)]
-    pub rsm_size: u32,
+    /// Reflective-shadow-map side in texels (default: for `lpv` 32 per cell of the grid, 256 to
+    /// 2048, see `lightlab_gpu::lpv::rsm_size_for_grid`; for `lpv-faithful` 256, the report's
+    /// §5.3 setup).
+    #[arg(long)]
+    pub rsm_size: Option<u32>,
     /// `lpv`: propagate without the geometry volume (light leaks through walls).
     #[arg(long)]
     pub no_lpv_occlusion: bool,
@@ -98,7 +100,7 @@ impl Default for LpvArgs {
         LpvArgs {
             lpv_grid: 32,
             lpv_iterations: None,
-            rsm_size: 256,
+            rsm_size: None,
             no_lpv_occlusion: false,
             lpv_damping: 2.0,
             lpv_cascades: 1,
@@ -119,7 +121,11 @@ impl LpvArgs {
             },
             grid: self.lpv_grid,
             iterations: self.lpv_iterations,
-            rsm_size: self.rsm_size,
+            rsm_size: self.rsm_size.unwrap_or(if technique == "lpv-faithful" {
+                256
+            } else {
+                lightlab_gpu::lpv::rsm_size_for_grid(self.lpv_grid)
+            }),
             occlusion: !self.no_lpv_occlusion,
             damping: self.lpv_damping,
             cascades: self.lpv_cascades,

@@ -232,6 +232,14 @@ pub struct RsmLight {
     pub pad2: f32,
 }
 
+/// An RSM side for a grid of `grid` cells per axis: 32 texels per cell (clamped to 256..=2048,
+/// a power of two). Fewer texels than that leave a surface seen at a grazing angle with a few
+/// bright VPLs per cell, whose 2-band lobes (negative behind them) speckle the indirect light
+/// with dark and bright spots (cornell's tall box at 32³ with a 256² RSM).
+pub fn rsm_size_for_grid(grid: u32) -> u32 {
+    grid.saturating_mul(32).next_power_of_two().clamp(256, 2048)
+}
+
 /// Half-angle of the frustum an emissive instance is seen through.
 const AREA_HALF_ANGLE: f32 = 75.0 * std::f32::consts::PI / 180.0;
 /// At most this many RSM views (the first ones of the scene; a point light takes six).
@@ -1016,6 +1024,13 @@ mod tests {
     use super::*;
     use crate::layout::check_struct;
     use crate::rust_layout;
+
+    #[test]
+    fn rsm_sizes_follow_the_grid() {
+        let sizes: Vec<u32> = [4, 8, 16, 32, 48, 64, 256].map(rsm_size_for_grid).to_vec();
+        assert_eq!(sizes, [256, 256, 512, 1024, 2048, 2048, 2048]);
+        assert!(LpvSettings::default().rsm_size <= rsm_size_for_grid(32));
+    }
 
     #[test]
     fn lpv_structs_match_the_wgsl_layout() {
