@@ -1297,7 +1297,13 @@ impl Renderer {
             mask,
             ldr_view: ldr.create_view(&Default::default()),
         };
-        let layers = views.len().max(1) as u32;
+        // GL decides a texture's target at creation and makes a six-layer texture a cube map,
+        // which cannot be read as an array: one spare layer for a scene whose only shadows are
+        // one point (or area) light's six faces.
+        let layers = match views.len().max(1) as u32 {
+            6 => 7,
+            n => n,
+        };
         let ss = if s.shadows.map() { s.shadow_size } else { 1 };
         let linear_layers = if s.shadows == ShadowMethod::MapLinear {
             layers
@@ -1392,7 +1398,17 @@ impl Renderer {
             entries: &[
                 entry(0, wgpu::BindingResource::TextureView(&sd_view)),
                 entry(1, wgpu::BindingResource::Sampler(&cmp)),
-                entry(2, wgpu::BindingResource::TextureView(&sl_view)),
+                // Without Heidrich's linear depths, the same binding reads the raw depths of
+                // the shadow maps (Depth32Float as unfilterable float; GLSL cannot read a
+                // `texture_depth` binding texel by texel): the area lights' blocker search.
+                entry(
+                    2,
+                    wgpu::BindingResource::TextureView(if s.shadows == ShadowMethod::MapLinear {
+                        &sl_view
+                    } else {
+                        &sd_view
+                    }),
+                ),
                 entry(3, wgpu::BindingResource::TextureView(&lm_view)),
                 entry(4, wgpu::BindingResource::Sampler(&lm_sampler)),
                 entry(5, sh_res.vertex.as_entire_binding()),

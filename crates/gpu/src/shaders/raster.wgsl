@@ -13,6 +13,7 @@
 
 @group(2) @binding(0) var shadow_depth: texture_depth_2d_array;
 @group(2) @binding(1) var shadow_cmp: sampler_comparison;
+// Heidrich's linear depths (shadow_mode 2); otherwise the shadow maps' raw depths.
 @group(2) @binding(2) var shadow_linear: texture_2d_array<f32>;
 // Light-maps (E/π): one layer per page; UV1 carries the page in its integer part.
 @group(2) @binding(3) var lightmap: texture_2d_array<f32>;
@@ -542,7 +543,7 @@ fn area_shadow(
     for (var i = 0u; i < AREA_SEARCH_TAPS; i++) {
         let o = disc_tap(i, AREA_SEARCH_TAPS, phi) * search;
         let t = clamp(vec2<i32>((uv + o) * frame.shadow_size), vec2<i32>(0), vec2<i32>(size - 1));
-        let stored = textureLoad(shadow_depth, t, i32(vi), 0);
+        let stored = textureLoad(shadow_linear, t, i32(vi), 0).x;
         if stored < z + dot(grad, o) {
             blockers += 1.0;
             depth_sum += shadow_linear_depth(sv, stored);
