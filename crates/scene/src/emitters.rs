@@ -20,7 +20,8 @@ pub struct PlanarEmitter {
     pub normal: Vec3,
     /// Total area (m²).
     pub area: f32,
-    /// Emitted radiance (the material's emission; an emissive texture is not applied).
+    /// Emitted radiance: the material's emission, times the area-weighted mean of its emissive
+    /// texture over the instance when it has one.
     pub radiance: Vec3,
     /// Half-edges of the rectangle: its corners are centre ± u ± v, and 4·|u|·|v| = area.
     pub half_u: Vec3,
@@ -41,7 +42,7 @@ impl Scene {
             let Some(mat) = self.materials.get(mesh.material) else {
                 continue;
             };
-            let radiance = mat.emission();
+            let mut radiance = mat.emission();
             if radiance.max_element() <= 0.0 {
                 continue;
             }
@@ -64,6 +65,51 @@ impl Scene {
             }
             let normal = na.normalize();
             let centre = ca / area;
+            if let Some(r) = mat.emissive_texture
+                && let Some(tex) = self.textures.get(r.texture)
+            {
+                // The centroids of an n × n subdivision of each triangle (n² equal parts).
+                let n = (16.0 / (tris.len() as f32).sqrt()).clamp(1.0, 8.0) as u32;
+                let uvs = match (&mesh.uv1, r.uv_set) {
+                    (Some(uv1), 1) => uv1,
+                    _ => &mesh.uv0,
+                };
+                let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+                for (t, p) in mesh.indices.chunks_exact(3).zip(&tris) {
+                    let a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+                    let Some(uv) = t
+                        .iter()
+                        .map(|&i| uvs.get(i as usize).copied())
+                        .collect::<Option<Vec<_>>>()
+                    else {
+                        continue;
+                    };
+                    let at = |b1: f32, b2: f32| uv[0] + (uv[1] - uv[0]) * b1 + (uv[2] - uv[0]) * b2;
+                    let nf = n as f32;
+                    let mut tsum = Vec3::ZERO;
+                    for i in 0..n {
+                        for j in 0..n - i {
+                            let (fi, fj) = (i as f32, j as f32);
+                            tsum += tex
+                                .sample(at((fi + 1.0 / 3.0) / nf, (fj + 1.0 / 3.0) / nf))
+                                .truncate();
+                            if i + j + 1 < n {
+                                tsum += tex
+                                    .sample(at((fi + 2.0 / 3.0) / nf, (fj + 2.0 / 3.0) / nf))
+                                    .truncate();
+                            }
+                        }
+                    }
+                    sum += a * tsum / (n * n) as f32;
+                    w += a;
+                }
+                if w > 0.0 {
+                    radiance *= sum / w;
+                }
+                if radiance.max_element() <= 0.0 {
+                    continue;
+                }
+            }
             // The rectangle: the smallest bounding rectangle over candidate axes (the principal
             // axis of the exact area moments, and the edges of small meshes, one of which is a
             // side of the minimal rectangle of a polygon), scaled to the true area (a rectangle
@@ -151,6 +197,41 @@ mod tests {
         assert!((big - 0.065).abs() < 1e-5 && (small - 0.0525).abs() < 1e-5);
         assert!(e.half_u.dot(e.half_v).abs() < 1e-7 && e.half_u.dot(e.normal).abs() < 1e-7);
         assert!((e.radiance - Vec3::new(17.0, 12.0, 4.0)).length() < 1e-4);
+    }
+
+    #[test]
+    fn an_emissive_texture_scales_the_radiance_by_its_mean() {
+        let mut s = crate::builtin::builtin("cornell").unwrap();
+        // Left half black, right half (1, 0.5, 0.25) over the lamp's UVs.
+        let tex = crate::Texture {
+            name: "half".into(),
+            width: 2,
+            height: 1,
+            data: vec![
+                glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
+                glam::Vec4::new(1.0, 0.5, 0.25, 1.0),
+            ],
+            srgb: false,
+        };
+        s.textures.push(tex);
+        let lamp = s.materials.iter().position(|m| m.name == "light").unwrap();
+        // The lamp's UVs over the texture's whole period.
+        let mesh = s.meshes.iter_mut().find(|m| m.material == lamp).unwrap();
+        assert_eq!(mesh.uv0.len(), 4);
+        mesh.uv0 = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+            .map(glam::Vec2::from_array)
+            .to_vec();
+        s.materials[lamp].emissive_texture = Some(crate::TextureRef {
+            texture: s.textures.len() - 1,
+            uv_set: 0,
+        });
+        let e = s.planar_emitters()[0];
+        let want = Vec3::new(17.0, 12.0, 4.0) * Vec3::new(0.5, 0.25, 0.125);
+        assert!(
+            (e.radiance - want).length() < 0.05 * want.length(),
+            "{} vs {want}",
+            e.radiance
+        );
     }
 
     #[test]
