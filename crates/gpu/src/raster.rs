@@ -2022,20 +2022,12 @@ impl Renderer {
                 continue;
             };
             let slot = [(li as u64 * SLOT) as u32];
-            let load = wgpu::Operations {
-                load: wgpu::LoadOp::Load,
-                store: wgpu::StoreOp::Store,
-            };
             if self.settings.shadows.stencil() {
                 let ts = self.timestamps(labels, "volumes");
+                // Depth and stencil only: no colour target to load and store.
                 let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("volumes"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &self.targets.hdr_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: load,
-                    })],
+                    color_attachments: &[],
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                         view: &self.targets.depth_view,
                         depth_ops: Some(load_f32()),
@@ -2296,7 +2288,10 @@ impl Pipelines {
         let zfail_back = stencil_face(C::Always, Op::IncrementWrap, Op::Keep);
         let zpass_front = stencil_face(C::Always, Op::Keep, Op::IncrementWrap);
         let zpass_back = stencil_face(C::Always, Op::Keep, Op::DecrementWrap);
-        let targets2 = [silent(HDR), silent(MASK)];
+        // Variant 0 (the frame's stencil passes) has no fragment stage and no colour target;
+        // variant 1 writes the test masks.
+        let targets2 = [silent(MASK)];
+        let no_targets: &[Option<wgpu::ColorTargetState>] = &[];
         let volume = |label, front, back| {
             [0, 1].map(|m| {
                 pipeline(
@@ -2307,8 +2302,8 @@ impl Pipelines {
                         layout: pl_frame,
                         vs: "volume_vs",
                         buffers: &volume_layout,
-                        fs: Some("volume_fs"),
-                        targets: std::slice::from_ref(&targets2[m]),
+                        fs: (m == 1).then_some("volume_fs"),
+                        targets: if m == 1 { &targets2 } else { no_targets },
                         depth: depth_state(false, C::Greater, front, back, 0xff, no_bias),
                         cull: None,
                     },
@@ -2335,8 +2330,8 @@ impl Pipelines {
                     layout: pl_shadow,
                     vs: "planar_vs",
                     buffers: &vl,
-                    fs: Some("volume_fs"),
-                    targets: std::slice::from_ref(&targets2[m]),
+                    fs: (m == 1).then_some("volume_fs"),
+                    targets: if m == 1 { &targets2 } else { no_targets },
                     depth: depth_state(false, C::GreaterEqual, replace, replace, 0xff, toward),
                     cull: None,
                 },
