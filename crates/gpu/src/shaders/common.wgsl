@@ -299,7 +299,8 @@ fn light_dir(li: GpuLight, p: vec3<f32>) -> vec3<f32> {
 // Irradiance at p (normal n) from a rectangle light of unit radiance: Lambert's polygon
 // formula E = ½·Σᵢ θᵢ·(γ̂ᵢ·n) (θᵢ the angle each edge subtends, γ̂ᵢ its plane's normal), exact
 // for a diffuse receiver, with the rectangle first clipped to the hemisphere above n
-// (Sutherland–Hodgman: at most five vertices).
+// (Sutherland–Hodgman: at most five vertices; room for eight, the most a receiver nearly in
+// the emitter's plane can produce from rounding).
 fn rect_irradiance(li: GpuLight, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let c = li.position - li.direction * li.area_offset - p;
     let q = array<vec3<f32>, 4>(
@@ -308,7 +309,7 @@ fn rect_irradiance(li: GpuLight, p: vec3<f32>, n: vec3<f32>) -> f32 {
         c + li.edge_u + li.edge_v,
         c - li.edge_u + li.edge_v,
     );
-    var o: array<vec3<f32>, 5>;
+    var o: array<vec3<f32>, 8>;
     var m = 0u;
     for (var i = 0u; i < 4u; i++) {
         let a = q[i];
