@@ -29,6 +29,9 @@ pub struct PlanarEmitter {
     pub double_sided: bool,
 }
 
+/// A world-space triangle and its area.
+type Tri = ([Vec3; 3], f32);
+
 impl Scene {
     /// The emissive instances that are roughly planar (|Σ aᵢnᵢ| ≥ ½·Σ aᵢ), brightest (radiance
     /// luminance × area) first. Others are left out: a Lambertian rectangle would misrepresent
@@ -47,18 +50,19 @@ impl Scene {
                 continue;
             }
             let world = |i: u32| inst.transform.transform_point3(mesh.positions[i as usize]);
-            let tris: Vec<[Vec3; 3]> = mesh
+            let tris: Vec<Tri> = mesh
                 .indices
                 .chunks_exact(3)
-                .map(|t| [world(t[0]), world(t[1]), world(t[2])])
+                .map(|t| {
+                    let p = [world(t[0]), world(t[1]), world(t[2])];
+                    (p, 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length())
+                })
                 .collect();
             let (mut area, mut na, mut ca) = (0.0f32, Vec3::ZERO, Vec3::ZERO);
-            for p in &tris {
-                let c = (p[1] - p[0]).cross(p[2] - p[0]);
-                let a = 0.5 * c.length();
+            for (p, a) in &tris {
                 area += a;
-                na += 0.5 * c;
-                ca += a * (p[0] + p[1] + p[2]) / 3.0;
+                na += 0.5 * (p[1] - p[0]).cross(p[2] - p[0]);
+                ca += *a * (p[0] + p[1] + p[2]) / 3.0;
             }
             if area <= 0.0 || !area.is_finite() || na.length() < 0.5 * area {
                 continue;
@@ -68,107 +72,26 @@ impl Scene {
             if let Some(r) = mat.emissive_texture
                 && let Some(tex) = self.textures.get(r.texture)
             {
-                // The centroids of an n × n subdivision of each triangle (n² equal parts).
-                let n = (16.0 / (tris.len() as f32).sqrt()).clamp(1.0, 8.0) as u32;
                 let uvs = match (&mesh.uv1, r.uv_set) {
                     (Some(uv1), 1) => uv1,
                     _ => &mesh.uv0,
                 };
-                let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
-                for (t, p) in mesh.indices.chunks_exact(3).zip(&tris) {
-                    let a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
-                    let Some(uv) = t
-                        .iter()
-                        .map(|&i| uvs.get(i as usize).copied())
-                        .collect::<Option<Vec<_>>>()
-                    else {
-                        continue;
-                    };
-                    let at = |b1: f32, b2: f32| uv[0] + (uv[1] - uv[0]) * b1 + (uv[2] - uv[0]) * b2;
-                    let nf = n as f32;
-                    let mut tsum = Vec3::ZERO;
-                    for i in 0..n {
-                        for j in 0..n - i {
-                            let (fi, fj) = (i as f32, j as f32);
-                            tsum += tex
-                                .sample(at((fi + 1.0 / 3.0) / nf, (fj + 1.0 / 3.0) / nf))
-                                .truncate();
-                            if i + j + 1 < n {
-                                tsum += tex
-                                    .sample(at((fi + 2.0 / 3.0) / nf, (fj + 2.0 / 3.0) / nf))
-                                    .truncate();
-                            }
-                        }
-                    }
-                    sum += a * tsum / (n * n) as f32;
-                    w += a;
-                }
-                if w > 0.0 {
-                    radiance *= sum / w;
+                if let Some(mean) = texture_mean(tex, uvs, &mesh.indices, &tris) {
+                    radiance *= mean;
                 }
                 if radiance.max_element() <= 0.0 {
                     continue;
                 }
             }
-            // The rectangle: the smallest bounding rectangle over candidate axes (the principal
-            // axis of the exact area moments, and the edges of small meshes, one of which is a
-            // side of the minimal rectangle of a polygon), scaled to the true area (a rectangle
-            // stays itself; a disc becomes the square of its area).
-            let (t, b) = normal.any_orthonormal_pair();
-            let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
-            for p in &tris {
-                // ∫ x xᵀ dA over a triangle = A/12 · (aaᵀ + bbᵀ + ccᵀ + ssᵀ), s = a + b + c.
-                let d = p.map(|q| q - centre);
-                let a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
-                let s = d[0] + d[1] + d[2];
-                for q in [d[0], d[1], d[2], s] {
-                    let (x, y) = (q.dot(t), q.dot(b));
-                    sxx += a / 12.0 * x * x;
-                    syy += a / 12.0 * y * y;
-                    sxy += a / 12.0 * x * y;
-                }
-            }
-            let mut angles = vec![0.5 * (2.0 * sxy).atan2(sxx - syy)];
-            if tris.len() <= 64 {
-                for p in &tris {
-                    for k in 0..3 {
-                        let e = p[(k + 1) % 3] - p[k];
-                        angles.push(e.dot(b).atan2(e.dot(t)));
-                    }
-                }
-            }
-            let extents = |phi: f32| {
-                let ax = t * phi.cos() + b * phi.sin();
-                let ay = normal.cross(ax);
-                let (mut hx, mut hy) = (0.0f32, 0.0f32);
-                for p in tris.iter().flatten() {
-                    let d = *p - centre;
-                    hx = hx.max(d.dot(ax).abs());
-                    hy = hy.max(d.dot(ay).abs());
-                }
-                (ax, ay, hx, hy)
-            };
-            let (ax, ay, hx, hy) = angles
-                .iter()
-                .map(|&phi| extents(phi))
-                .min_by(|a, b| (a.2 * a.3).total_cmp(&(b.2 * b.3)))
-                .unwrap_or((t, b, 0.0, 0.0));
-            let fit = 4.0 * hx * hy;
-            let (hx, hy) = if fit > 0.0 {
-                let k = (area / fit).sqrt();
-                (hx * k, hy * k)
-            } else {
-                let s = 0.5 * area.sqrt();
-                (s, s)
-            };
+            let (half_u, half_v) = bounding_rectangle(&tris, centre, normal, area);
             out.push(PlanarEmitter {
                 instance: ii,
                 centre,
                 normal,
                 area,
                 radiance,
-                half_u: ax * hx,
-                half_v: ay * hy,
+                half_u,
+                half_v,
                 double_sided: mat.double_sided,
             });
         }
@@ -176,6 +99,100 @@ impl Scene {
         out.sort_by(|a, b| power(b).total_cmp(&power(a)));
         out
     }
+}
+
+/// The area-weighted mean of `tex` over the triangles (`indices` into `uvs`), from the
+/// centroids of an n × n subdivision of each (n² equal parts); None without usable UVs.
+fn texture_mean(
+    tex: &crate::Texture,
+    uvs: &[glam::Vec2],
+    indices: &[u32],
+    tris: &[Tri],
+) -> Option<Vec3> {
+    let n = (16.0 / (tris.len() as f32).sqrt()).clamp(1.0, 8.0) as u32;
+    let nf = n as f32;
+    let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+    for (t, (_, a)) in indices.chunks_exact(3).zip(tris) {
+        let Some(uv) = t
+            .iter()
+            .map(|&i| uvs.get(i as usize).copied())
+            .collect::<Option<Vec<_>>>()
+        else {
+            continue;
+        };
+        let at = |b1: f32, b2: f32| {
+            let q = uv[0] + (uv[1] - uv[0]) * (b1 / nf) + (uv[2] - uv[0]) * (b2 / nf);
+            tex.sample(q).truncate()
+        };
+        let mut tsum = Vec3::ZERO;
+        for i in 0..n {
+            for j in 0..n - i {
+                let (fi, fj) = (i as f32, j as f32);
+                tsum += at(fi + 1.0 / 3.0, fj + 1.0 / 3.0);
+                if i + j + 1 < n {
+                    tsum += at(fi + 2.0 / 3.0, fj + 2.0 / 3.0);
+                }
+            }
+        }
+        sum += *a * tsum / (n * n) as f32;
+        w += a;
+    }
+    (w > 0.0).then(|| sum / w)
+}
+
+/// Half-edges of the rectangle standing for planar triangles of total `area` around `centre`:
+/// the smallest bounding rectangle over candidate axes (the principal axis of the exact area
+/// moments, and the edges of small meshes, one of which is a side of the minimal rectangle of a
+/// polygon), scaled to the true area (a rectangle stays itself; a disc becomes the square of
+/// its area).
+fn bounding_rectangle(tris: &[Tri], centre: Vec3, normal: Vec3, area: f32) -> (Vec3, Vec3) {
+    let (t, b) = normal.any_orthonormal_pair();
+    let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
+    for (p, a) in tris {
+        // ∫ x xᵀ dA over a triangle = A/12 · (aaᵀ + bbᵀ + ccᵀ + ssᵀ), s = a + b + c.
+        let d = p.map(|q| q - centre);
+        let s = d[0] + d[1] + d[2];
+        for q in [d[0], d[1], d[2], s] {
+            let (x, y) = (q.dot(t), q.dot(b));
+            sxx += a / 12.0 * x * x;
+            syy += a / 12.0 * y * y;
+            sxy += a / 12.0 * x * y;
+        }
+    }
+    let mut angles = vec![0.5 * (2.0 * sxy).atan2(sxx - syy)];
+    if tris.len() <= 64 {
+        for (p, _) in tris {
+            for k in 0..3 {
+                let e = p[(k + 1) % 3] - p[k];
+                angles.push(e.dot(b).atan2(e.dot(t)));
+            }
+        }
+    }
+    let extents = |phi: f32| {
+        let ax = t * phi.cos() + b * phi.sin();
+        let ay = normal.cross(ax);
+        let (mut hx, mut hy) = (0.0f32, 0.0f32);
+        for p in tris.iter().flat_map(|(p, _)| p) {
+            let d = *p - centre;
+            hx = hx.max(d.dot(ax).abs());
+            hy = hy.max(d.dot(ay).abs());
+        }
+        (ax, ay, hx, hy)
+    };
+    let (ax, ay, hx, hy) = angles
+        .iter()
+        .map(|&phi| extents(phi))
+        .min_by(|a, b| (a.2 * a.3).total_cmp(&(b.2 * b.3)))
+        .unwrap_or((t, b, 0.0, 0.0));
+    let fit = 4.0 * hx * hy;
+    let (hx, hy) = if fit > 0.0 {
+        let k = (area / fit).sqrt();
+        (hx * k, hy * k)
+    } else {
+        let s = 0.5 * area.sqrt();
+        (s, s)
+    };
+    (ax * hx, ay * hy)
 }
 
 #[cfg(test)]
