@@ -400,15 +400,10 @@ pub enum Reemit {
     Central,
 }
 
-/// One propagation step (Kaplanyan, the face normal re-emission): returns only the newly
-/// arrived light. With an occlusion volume, light crossing into the receiving cell is
-/// attenuated by its transmittance.
-pub fn propagate_step(src: &Volume, occlusion: Option<&Occlusion>) -> Volume {
-    propagate_step_with(src, occlusion, Reemit::FaceNormal)
-}
-
-/// One propagation step with the side faces' light re-emitted as `reemit` says.
-pub fn propagate_step_with(src: &Volume, occlusion: Option<&Occlusion>, reemit: Reemit) -> Volume {
+/// One propagation step (Kaplanyan's 6-face scheme, the side faces' light re-emitted as
+/// `reemit` says): returns only the newly arrived light. With an occlusion volume, light
+/// crossing into the receiving cell is attenuated by its transmittance.
+pub fn propagate_step(src: &Volume, occlusion: Option<&Occlusion>, reemit: Reemit) -> Volume {
     let g = src.grid;
     // Per axis d, the receiving cell's 5 faces: the direction from the source centre to the
     // face centre, and the cosine lobe (around the face normal, or that direction) scaled by
@@ -456,15 +451,9 @@ pub fn propagate_step_with(src: &Volume, occlusion: Option<&Occlusion>, reemit: 
     out
 }
 
-/// Seed plus `iterations` propagation steps (Kaplanyan's face-normal re-emission),
-/// accumulated. Occlusion (if any) is skipped on the first step, as Kaplanyan & Dachsbacher do
-/// against self-shadowing.
-pub fn propagate(seed: &Volume, occlusion: Option<&Occlusion>, iterations: u32) -> Volume {
-    propagate_with(seed, occlusion, iterations, Reemit::FaceNormal)
-}
-
-/// [`propagate`] with the side faces' light re-emitted as `reemit` says.
-pub fn propagate_with(
+/// Seed plus `iterations` propagation steps, accumulated. Occlusion (if any) is skipped on the
+/// first step, as Kaplanyan & Dachsbacher do against self-shadowing.
+pub fn propagate(
     seed: &Volume,
     occlusion: Option<&Occlusion>,
     iterations: u32,
@@ -473,7 +462,7 @@ pub fn propagate_with(
     let mut acc = seed.clone();
     let mut cur = seed.clone();
     for i in 0..iterations {
-        cur = propagate_step_with(&cur, if i == 0 { None } else { occlusion }, reemit);
+        cur = propagate_step(&cur, if i == 0 { None } else { occlusion }, reemit);
         acc.accumulate(&cur);
     }
     acc
@@ -625,7 +614,7 @@ mod tests {
             for reemit in [Reemit::FaceNormal, Reemit::Central] {
                 let mut cur = seed.clone();
                 for it in 0..6 {
-                    cur = propagate_step_with(&cur, None, reemit);
+                    cur = propagate_step(&cur, None, reemit);
                     let f = cur.total_flux();
                     let err = ((f - vpl.flux) / vpl.flux).abs().max_element();
                     assert!(
@@ -678,9 +667,13 @@ mod tests {
         v.cells[g.index(IVec3::splat(5))] = [[1.0, 0.0, 0.0, 0.0]; 3];
         let f0 = v.total_flux().x;
         let wpi = propagate_step_wpi(&propagate_step_wpi(&v)).total_flux().x;
-        let six = propagate_step(&propagate_step(&v, None), None)
-            .total_flux()
-            .x;
+        let six = propagate_step(
+            &propagate_step(&v, None, Reemit::FaceNormal),
+            None,
+            Reemit::FaceNormal,
+        )
+        .total_flux()
+        .x;
         assert!((wpi / f0 - 1.0).abs() > 0.05, "WPI grows: {}", wpi / f0);
         assert!(
             (six / f0 - 1.0).abs() < 0.01,
@@ -777,7 +770,7 @@ mod tests {
                 });
             }
         }
-        let own = propagate(&inject(g, &floor), None, 8);
+        let own = propagate(&inject(g, &floor), None, 8, Reemit::FaceNormal);
         let p = Vec3::new(8.0, 2.0, 8.0);
         let plain = own.irradiance(p, Vec3::Y).x;
         let damped = own.irradiance_damped(p, Vec3::Y, 2.0).x;
@@ -788,7 +781,7 @@ mod tests {
             normal: -Vec3::Y,
             flux: Vec3::ONE,
         }];
-        let other = propagate(&inject(g, &above), None, 8);
+        let other = propagate(&inject(g, &above), None, 8, Reemit::FaceNormal);
         let plain = other.irradiance(p, Vec3::Y).x;
         let damped = other.irradiance_damped(p, Vec3::Y, 2.0).x;
         assert!(plain > 0.0);
@@ -867,7 +860,7 @@ mod tests {
             let mut acc = seed.clone();
             let mut radius = vec![];
             for _ in 0..16 {
-                cur = propagate_step_with(&cur, None, reemit);
+                cur = propagate_step(&cur, None, reemit);
                 acc.accumulate(&cur);
                 let (mut m, mut w) = (0.0f64, 0.0f64);
                 for c in g.cells() {

@@ -81,7 +81,7 @@ fn cpu_volume(
         .settings
         .occlusion
         .then(|| Occlusion::inject(grid, &surfels));
-    lpv::propagate_with(
+    lpv::propagate(
         &seed,
         occ.as_ref(),
         l.settings.iterations(),
