@@ -882,7 +882,7 @@ impl Renderer {
         // The scene's lights, then (when enabled) its planar emitters as area lights: each a
         // point light at the emitter's centre, moved off it along its normal, for the shadows,
         // and a Lambertian rectangle for the shading (kind 3).
-        let mut sources: Vec<(Light, Option<PlanarEmitter>)> =
+        let mut sources: Vec<(Light, Option<(PlanarEmitter, f32)>)> =
             scene.lights.iter().map(|l| (l.clone(), None)).collect();
         // A light-map holds the emitters' light already; SH transfer is lit by its SH light only.
         if s.area_lights && lightmap.is_none() && sh.is_none() {
@@ -897,7 +897,7 @@ impl Renderer {
                     direction: e.normal,
                     range: None,
                 };
-                sources.push((l, Some(e)));
+                sources.push((l, Some((e, offset))));
             }
         }
         for (li, (l, area)) in sources.iter().enumerate() {
@@ -907,13 +907,13 @@ impl Renderer {
                 Some(_) => None,
             };
             let mut g = lights::gpu_light(l, s.attenuation, radius);
-            if let Some(e) = area {
+            if let Some((e, offset)) = area {
                 g.kind = 3;
                 g.attenuation = 0;
                 g.atten_scale = 1.0;
                 g.edge_u = e.half_u.to_array();
                 g.edge_v = e.half_v.to_array();
-                g.area_offset = area_light_offset(e);
+                g.area_offset = *offset;
                 g.two_sided = e.double_sided as u32;
             }
             let first = views.len();

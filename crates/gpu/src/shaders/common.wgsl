@@ -296,13 +296,12 @@ fn light_dir(li: GpuLight, p: vec3<f32>) -> vec3<f32> {
     return normalize(li.position - p);
 }
 
-// Irradiance at p (normal n) from a rectangle light of unit radiance: Lambert's polygon
-// formula E = ½·Σᵢ θᵢ·(γ̂ᵢ·n) (θᵢ the angle each edge subtends, γ̂ᵢ its plane's normal), exact
-// for a diffuse receiver, with the rectangle first clipped to the hemisphere above n
-// (Sutherland–Hodgman: at most five vertices; room for eight, the most a receiver nearly in
-// the emitter's plane can produce from rounding).
-fn rect_irradiance(li: GpuLight, p: vec3<f32>, n: vec3<f32>) -> f32 {
-    let c = li.position - li.direction * li.area_offset - p;
+// Irradiance at a point with normal n from a rectangle light of unit radiance whose centre is
+// at `c` from the point: Lambert's polygon formula E = ½·Σᵢ θᵢ·(γ̂ᵢ·n) (θᵢ the angle each edge
+// subtends, γ̂ᵢ its plane's normal), exact for a diffuse receiver, with the rectangle first
+// clipped to the hemisphere above n (Sutherland–Hodgman: at most five vertices; room for
+// eight, the most a receiver nearly in the emitter's plane can produce from rounding).
+fn rect_irradiance(li: GpuLight, c: vec3<f32>, n: vec3<f32>) -> f32 {
     let q = array<vec3<f32>, 4>(
         c - li.edge_u - li.edge_v,
         c + li.edge_u - li.edge_v,
@@ -361,7 +360,7 @@ fn shade_area(s: Surface, li: GpuLight, v: vec3<f32>) -> vec3<f32> {
     var out = vec3<f32>(0.0);
     let nv = dot(s.n, v);
     if nv > 0.0 {
-        out += diffuse_coef(s, nv) * rect_irradiance(li, s.p, s.n);
+        out += diffuse_coef(s, nv) * rect_irradiance(li, to, s.n);
         if dot(s.ng, l) > 0.0 {
             var spec = s;
             spec.diffuse = vec3<f32>(0.0);
@@ -370,7 +369,7 @@ fn shade_area(s: Surface, li: GpuLight, v: vec3<f32>) -> vec3<f32> {
     }
     if s.transmission > 0.0 {
         // Thin diffuse transmission: light reaching the back side leaves towards the viewer.
-        out += s.diffuse * (s.transmission / PI) * rect_irradiance(li, s.p, -s.n);
+        out += s.diffuse * (s.transmission / PI) * rect_irradiance(li, to, -s.n);
     }
     return out * li.color;
 }
