@@ -226,21 +226,7 @@ fn phong_with_shadow_volumes_matches_the_direct_reference() {
             BrdfModel::BlinnPhong
         };
     }
-    let accel = Accel::new(&scene);
-    let reference = PathTracer::new(&scene, &accel)
-        .render(
-            &RenderSettings {
-                width: N,
-                height: N,
-                spp: 16,
-                max_depth: 1,
-                min_depth: 0,
-                seed: 3,
-                camera: 0,
-            },
-            &|_, _| true,
-        )
-        .unwrap();
+    let reference = direct_reference(&scene, 16, 3);
     let ssaa = 4;
     for path in [RenderPath::Forward, RenderPath::Deferred] {
         let mut r = Renderer::new(
@@ -383,7 +369,7 @@ fn background_is_the_environment_as_the_path_tracer_sees_it() {
 }
 
 /// The path tracer's direct light (emission seen + one scattering event) at N×N.
-fn direct_reference(scene: &Scene, spp: u32) -> Image {
+fn direct_reference(scene: &Scene, spp: u32, seed: u64) -> Image {
     let accel = Accel::new(scene);
     PathTracer::new(scene, &accel)
         .render(
@@ -393,7 +379,7 @@ fn direct_reference(scene: &Scene, spp: u32) -> Image {
                 spp,
                 max_depth: 1,
                 min_depth: 0,
-                seed: 11,
+                seed,
                 camera: 0,
             },
             &|_, _| true,
@@ -491,7 +477,7 @@ fn an_emissive_rectangle_lights_like_the_path_tracer() {
         60f32.to_radians(),
     ));
     assert_eq!(s.planar_emitters().len(), 1);
-    let reference = direct_reference(&s, 64);
+    let reference = direct_reference(&s, 64, 11);
     let img = area_lit(&ctx, &s, ShadowMethod::None, true);
     let e = lightlab_core::metrics::relmse(&img, &reference).unwrap();
     let ratio = lit_mean(&img, &reference) / lit_mean(&reference, &reference);
@@ -525,7 +511,7 @@ fn cornell_is_lit_by_its_lamp() {
         return;
     };
     let scene = builtin::builtin("cornell").unwrap();
-    let reference = direct_reference(&scene, 64);
+    let reference = direct_reference(&scene, 64, 11);
     let mut errors = vec![];
     for shadows in [
         ShadowMethod::VolumesZFail,
