@@ -99,7 +99,8 @@ fn ray_eps(p: Vec3) -> f32 {
 }
 
 /// Shoot. `transfer` holds the patches' direct transfer (patch-major, `nc` coefficients each)
-/// and returns their total. `progress(done shots)` returning false cancels (Err(())).
+/// and returns their total. `progress(done shots)` returning false cancels
+/// (`BakeError::Cancelled`).
 pub fn shoot(
     accel: &Accel,
     patches: &[ShootPatch],
@@ -107,15 +108,18 @@ pub fn shoot(
     nc: usize,
     s: &ShootSettings,
     progress: &(dyn Fn(u64) -> bool + Sync),
-) -> Result<ShootStats, String> {
+) -> Result<ShootStats, crate::BakeError> {
     if !(1..=8).contains(&s.block_size) {
-        return Err(format!(
+        return Err(crate::BakeError::Settings(format!(
             "shooting block size must be 1 to 8, not {}",
             s.block_size
-        ));
+        )));
     }
     if !(s.stop > 0.0 && s.stop < 1.0) {
-        return Err(format!("shooting stop must be in (0, 1), not {}", s.stop));
+        return Err(crate::BakeError::Settings(format!(
+            "shooting stop must be in (0, 1), not {}",
+            s.stop
+        )));
     }
     let np = patches.len();
     assert_eq!(transfer.len(), np * nc, "one transfer vector per patch");
@@ -210,7 +214,7 @@ pub fn shoot(
             break;
         }
         if stats.shots.is_multiple_of(64) && !progress(stats.shots) {
-            return Err("cancelled".into());
+            return Err(crate::BakeError::Cancelled);
         }
         stats.shots += 1;
         let b = &blocks[bi];

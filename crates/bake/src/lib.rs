@@ -21,6 +21,7 @@ pub mod repair;
 pub mod seams;
 pub mod sh_compress;
 pub mod sh_cpca;
+pub mod sh_folder;
 pub mod sh_light;
 pub mod texels;
 pub mod view;
@@ -68,22 +69,10 @@ pub enum Method {
     Path,
 }
 
-impl Method {
-    pub const NAMES: [&'static str; 2] = ["radiosity", "path"];
-    pub fn parse(s: &str) -> Option<Method> {
-        match s {
-            "radiosity" => Some(Method::Radiosity),
-            "path" | "path-traced" => Some(Method::Path),
-            _ => None,
-        }
-    }
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Radiosity => "radiosity",
-            Method::Path => "path",
-        }
-    }
-}
+lightlab_core::named_enum!(Method, "light-map method", {
+    Radiosity => "radiosity",
+    Path => "path",
+}, aliases { "path-traced" => Path });
 
 /// How a punctual light enters the bake, so baked and dynamic light are never counted twice.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -98,16 +87,11 @@ pub enum LightMode {
     Realtime,
 }
 
-impl LightMode {
-    pub fn parse(s: &str) -> Option<LightMode> {
-        match s {
-            "baked" => Some(LightMode::Baked),
-            "indirect-only" | "indirect" => Some(LightMode::IndirectOnly),
-            "realtime" | "dynamic" => Some(LightMode::Realtime),
-            _ => None,
-        }
-    }
-}
+lightlab_core::named_enum!(LightMode, "light mode", {
+    Baked => "baked",
+    IndirectOnly => "indirect-only",
+    Realtime => "realtime",
+}, aliases { "indirect" => IndirectOnly, "dynamic" => Realtime });
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BakeSettings {

@@ -20,15 +20,10 @@ pub enum Filter {
     Bicubic,
 }
 
-impl Filter {
-    pub fn parse(s: &str) -> Option<Filter> {
-        match s {
-            "bilinear" => Some(Filter::Bilinear),
-            "bicubic" => Some(Filter::Bicubic),
-            _ => None,
-        }
-    }
-}
+lightlab_core::named_enum!(Filter, "light-map filter", {
+    Bilinear => "bilinear",
+    Bicubic => "bicubic",
+});
 
 /// What a surface point reads from the light-maps: page, page UV and the hit's attributes.
 pub struct LightmapHit {

@@ -369,7 +369,8 @@ fn shooting_converges_to_the_multi_bounce_reference() {
 #[test]
 fn sh_lightmap_folder_round_trips() {
     use lightlab_bake::layout::LayoutSettings;
-    use lightlab_bake::prt::{bake_sh_lightmaps, read_sh, write_sh};
+    use lightlab_bake::prt::bake_sh_lightmaps;
+    use lightlab_bake::sh_folder::{read_sh, write_sh};
     let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
     let layout = LayoutSettings {
         texels_per_metre: 8.0,
@@ -402,7 +403,7 @@ fn sh_lightmap_folder_round_trips() {
     assert!(occ.mean().x < 1.0 && occ.mean().x > 0.2, "{:?}", occ.mean());
     let back = read_sh(dir.path(), &scene).unwrap();
     // The compressed copy comes back exactly.
-    let (_, cb) = lightlab_bake::prt::read_sh_with_compressed(dir.path(), &scene).unwrap();
+    let (_, cb) = lightlab_bake::sh_folder::read_sh_with_compressed(dir.path(), &scene).unwrap();
     let cb = cb.expect("the folder holds the compressed copy");
     assert_eq!(cb.representatives, c.representatives);
     assert_eq!(cb.pages, c.pages);
@@ -410,7 +411,7 @@ fn sh_lightmap_folder_round_trips() {
     let idx = dir.path().join("indices-0.bin");
     let bytes = std::fs::read(&idx).unwrap();
     std::fs::write(&idx, &bytes[..bytes.len() - 2]).unwrap();
-    let e = lightlab_bake::prt::read_sh_with_compressed(dir.path(), &scene).unwrap_err();
+    let e = lightlab_bake::sh_folder::read_sh_with_compressed(dir.path(), &scene).unwrap_err();
     assert!(e.to_string().contains("indices-0.bin"), "{e}");
     std::fs::write(&idx, &bytes).unwrap();
     assert_eq!(back.bands, 4);

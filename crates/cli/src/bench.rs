@@ -13,8 +13,11 @@
 //! same texel count and samples per texel and prints the time ratio.
 
 use crate::load_scene;
+use crate::options::{BakeArgs, TechniqueArgs};
+use crate::technique::Technique;
+use crate::techniques::{Bakes, Request};
 use anyhow::{Context, Result};
-use clap::ValueEnum;
+use clap::{Args, Subcommand};
 use glam::Vec2;
 use lightlab_core::sampling::{Frame, Rng, cosine_hemisphere};
 use lightlab_trace::Accel;
@@ -22,11 +25,69 @@ use lightlab_trace::accel::RayQuery;
 use lightlab_trace::render::surface;
 use std::time::Instant;
 
-#[derive(Clone, Copy, ValueEnum, Debug)]
-pub enum BenchKind {
-    Trace,
-    Bake,
-    Frame,
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// Closest-hit ray casting: coherent and incoherent rays, one thread and all.
+    Trace {
+        /// A built-in scene name or a .gltf/.glb path.
+        #[arg(long)]
+        scene: String,
+        /// Rays per measurement.
+        #[arg(long, default_value_t = 1_000_000)]
+        rays: usize,
+        /// Also write the triangles and rays to this folder (for peers).
+        #[arg(long)]
+        dump: Option<std::path::PathBuf>,
+        /// Ignore alpha (treat alpha-tested triangles as opaque).
+        #[arg(long)]
+        opaque: bool,
+        /// Print one JSON object with the figures as the last line.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Both light-map bakers: time, texels, rays/s, peak memory.
+    Bake {
+        #[arg(long)]
+        scene: String,
+        #[command(flatten)]
+        bake: BakeArgs,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Milliseconds per pass of a GPU technique (GPU timestamps where the adapter has them).
+    Frame {
+        #[arg(long)]
+        scene: String,
+        #[arg(long)]
+        technique: Technique,
+        #[command(flatten)]
+        frame: FrameBenchArgs,
+        #[command(flatten)]
+        gpu: TechniqueArgs,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// `lightlab bench ...`.
+pub fn run(cmd: BenchCommand) -> Result<()> {
+    match cmd {
+        BenchCommand::Trace {
+            scene,
+            rays,
+            dump,
+            opaque,
+            json,
+        } => bench_trace(&scene, json, rays, dump, opaque),
+        BenchCommand::Bake { scene, bake, json } => bench_bake(&scene, &bake, json),
+        BenchCommand::Frame {
+            scene,
+            technique,
+            frame,
+            gpu,
+            json,
+        } => bench_frame(&scene, technique, &gpu, &frame, json),
+    }
 }
 
 /// Primary rays on a square grid over the default camera, and diffuse bounce rays from their
@@ -139,19 +200,13 @@ fn dump(
     Ok(())
 }
 
-pub fn run(
-    kind: BenchKind,
+fn bench_trace(
     scene: &str,
     json: bool,
     n: usize,
     dump_dir: Option<std::path::PathBuf>,
     opaque: bool,
 ) -> Result<()> {
-    match kind {
-        BenchKind::Bake => anyhow::bail!("bench bake is handled by bench::bench_bake"),
-        BenchKind::Frame => anyhow::bail!("bench frame is handled by raster_cmd::bench_frame"),
-        BenchKind::Trace => {}
-    }
     anyhow::ensure!(
         (1..=100_000_000).contains(&n),
         "--rays must be in 1..=100000000"
@@ -216,7 +271,7 @@ fn reset_peak_memory() {
 }
 
 /// `lightlab bench bake`: both light-map bakers on one scene.
-pub fn bench_bake(scene: &str, args: &crate::bake_cmd::BakeArgs, json: bool) -> Result<()> {
+fn bench_bake(scene: &str, args: &BakeArgs, json: bool) -> Result<()> {
     use lightlab_bake::{Method, bake_lightmaps, no_progress};
     let s = load_scene(scene, false)?;
     let threads = rayon::current_num_threads();
@@ -284,4 +339,189 @@ pub fn bench_bake(scene: &str, args: &crate::bake_cmd::BakeArgs, json: bool) -> 
         );
     }
     Ok(())
+}
+
+/// Options of `bench frame`.
+#[derive(Args, Clone, Debug)]
+pub struct FrameBenchArgs {
+    #[arg(long, default_value_t = 1920)]
+    pub width: u32,
+    #[arg(long, default_value_t = 1080)]
+    pub height: u32,
+    /// Frames measured (after two warm-up frames); medians are reported.
+    #[arg(long, default_value_t = 30)]
+    pub frames: usize,
+    /// Use exactly this many lights: extra white point lights on a circle (r = 3 m, 3 m high)
+    /// are added, or the scene's list is cut.
+    #[arg(long)]
+    pub lights: Option<usize>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Exactly `n` lights: extra white point lights on a circle, or the scene's list cut.
+fn set_light_count(scene: &mut lightlab_scene::Scene, n: usize) -> Result<()> {
+    anyhow::ensure!(n <= 256, "--lights must be at most 256");
+    let extra = n.saturating_sub(scene.lights.len());
+    for i in 0..extra {
+        let phi = i as f32 * 2.399_963; // golden angle
+        scene.lights.push(lightlab_scene::Light {
+            name: format!("bench_{i}"),
+            kind: lightlab_scene::LightKind::Point,
+            color: glam::Vec3::ONE,
+            intensity: 5.0,
+            position: glam::Vec3::new(3.0 * phi.cos(), 3.0, 3.0 * phi.sin()),
+            direction: -glam::Vec3::Y,
+            range: None,
+        });
+    }
+    scene.lights.truncate(n);
+    Ok(())
+}
+
+/// Per-frame medians of `bench frame`.
+#[derive(Default)]
+struct FrameSamples {
+    per_pass: std::collections::BTreeMap<&'static str, Vec<f64>>,
+    gpu: Vec<f64>,
+    wall: Vec<f64>,
+    cpu: Vec<f64>,
+    sh_light: Vec<f64>,
+}
+
+/// `lightlab bench frame`: milliseconds per pass of a GPU technique.
+fn bench_frame(
+    scene: &str,
+    technique: Technique,
+    a: &TechniqueArgs,
+    f: &FrameBenchArgs,
+    json: bool,
+) -> Result<()> {
+    anyhow::ensure!(
+        technique.is_gpu(),
+        "bench frame needs a GPU technique ({})",
+        Technique::gpu()
+            .map(|t| t.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    anyhow::ensure!(
+        (1..=10_000).contains(&f.frames),
+        "--frames must be 1 to 10000"
+    );
+    let mut scene = load_scene(scene, false)?;
+    crate::options::apply_brdf(&mut scene, a.raster.brdf);
+    if let Some(n) = f.lights {
+        set_light_count(&mut scene, n)?;
+    }
+    let ctx = crate::gpu_context()?;
+    let req = Request {
+        scene: &scene,
+        technique,
+        args: a,
+        width: f.width,
+        height: f.height,
+        camera: 0,
+    };
+    let mut tr = crate::techniques::build(&ctx, &req, &mut Bakes::default())?;
+    tr.renderer.render(&ctx);
+    tr.renderer.render(&ctx);
+    let mut m = FrameSamples::default();
+    for frame in 0..f.frames {
+        let r = &mut tr.renderer;
+        if r.settings.wind.amplitude > 0.0 {
+            let mut w = r.settings.wind;
+            w.time = a.raster.wind_time + frame as f32 / 60.0;
+            r.set_wind(&ctx, w)?;
+        }
+        if let Some(ms) = tr.update(&ctx)? {
+            m.sh_light.push(ms);
+        }
+        let t = tr.renderer.render(&ctx);
+        for (k, v) in &t.gpu_ms {
+            m.per_pass.entry(k).or_default().push(*v);
+        }
+        m.gpu.push(t.gpu_ms.values().sum());
+        m.wall.push(t.wall_ms);
+        m.cpu.push(t.cpu_volumes_ms);
+    }
+    report_frame(&ctx, &scene, technique, &tr.renderer, f, m, json);
+    Ok(())
+}
+
+/// Print `bench frame`'s table (and its JSON line).
+fn report_frame(
+    ctx: &lightlab_gpu::GpuContext,
+    scene: &lightlab_scene::Scene,
+    technique: Technique,
+    r: &lightlab_gpu::raster::Renderer,
+    f: &FrameBenchArgs,
+    m: FrameSamples,
+    json: bool,
+) {
+    let projector = !m.sh_light.is_empty();
+    let passes: std::collections::BTreeMap<&str, f64> = m
+        .per_pass
+        .into_iter()
+        .map(|(k, v)| (k, median(v)))
+        .collect();
+    let (gpu, wall, cpu) = (median(m.gpu), median(m.wall), median(m.cpu));
+    println!(
+        "{} on {} at {}×{}, {} lights, {} triangles, {} ({:?}); median of {} frames",
+        technique,
+        scene.name,
+        f.width,
+        f.height,
+        r.light_count(),
+        r.scene.triangles,
+        ctx.info.name,
+        ctx.info.backend,
+        f.frames
+    );
+    if passes.is_empty() {
+        println!("(no GPU timestamps on this adapter: wall-clock frame time only)");
+    }
+    for (k, v) in &passes {
+        println!("  {k:<16} {v:>9.3} ms");
+    }
+    if !passes.is_empty() {
+        println!("  {:<16} {gpu:>9.3} ms", "GPU total");
+    }
+    println!("  {:<16} {cpu:>9.3} ms", "CPU volumes");
+    let lpv_bytes = r.lpv().map(|l| l.memory_bytes());
+    if let Some(b) = lpv_bytes {
+        println!(
+            "  {:<16} {:>9.3} MiB",
+            "LPV memory",
+            b as f64 / (1 << 20) as f64
+        );
+    }
+    let projection = median(m.sh_light);
+    if projector {
+        println!("  {:<16} {projection:>9.3} ms", "CPU SH light");
+    }
+    println!(
+        "  {:<16} {wall:>9.3} ms (submit to idle, incl. readback of timings)",
+        "wall"
+    );
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "scene": scene.name, "technique": technique.name(), "width": f.width,
+                "height": f.height, "lights": r.light_count(), "triangles": r.scene.triangles,
+                "adapter": ctx.info.name, "backend": format!("{:?}", ctx.info.backend),
+                "frames": f.frames, "passes_ms": passes, "gpu_ms": gpu,
+                "cpu_volumes_ms": cpu, "cpu_sh_light_ms": projection, "wall_ms": wall,
+                "lpv_bytes": lpv_bytes, "grid": r.lpv().map(|l| l.settings.grid),
+                "rsm": r.lpv().map(|l| l.settings.rsm_size),
+            })
+        );
+    }
 }

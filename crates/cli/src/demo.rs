@@ -2,7 +2,10 @@
 //! and writes `DIR/report.html` with the images, errors against the reference, timings and
 //! settings. Each later technique adds its rows here.
 
+use crate::options::{BakeArgs, RasterArgs, TechniqueArgs};
 use crate::render::render_reference;
+use crate::technique::{Family, Technique};
+use crate::techniques::{Bakes, Request};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use lightlab_core::image::{LdrSettings, write_atomic};
@@ -45,7 +48,7 @@ fn settings_for(scene: &str, q: Quality) -> RenderSettings {
 
 struct Row {
     scene: String,
-    technique: String,
+    technique: Technique,
     file: String,
     settings: RenderSettings,
     seconds: f64,
@@ -73,7 +76,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
     let mut rows = vec![];
     // The GPU techniques need an adapter (lavapipe will do); without one they are left out of
     // the report with a note rather than failing the whole demo.
-    let gpu = match crate::raster_cmd::context() {
+    let gpu = match crate::gpu_context() {
         Ok(c) => Some(c),
         Err(e) => {
             eprintln!("GPU techniques skipped: {e:#}");
@@ -83,9 +86,9 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
     for name in names {
         let scene = lightlab_scene::builtin::builtin(name).expect("built-in");
         let mut reference: Option<lightlab_core::image::Image> = None;
-        for technique in ["reference", "direct"] {
+        for technique in [Technique::Reference, Technique::Direct] {
             let mut settings = settings_for(name, quality);
-            if technique == "direct" {
+            if technique == Technique::Direct {
                 settings.spp = (settings.spp / 2).max(8);
             }
             let t = Instant::now();
@@ -97,12 +100,12 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 "{name:<8} {technique:<10} {:>4}×{:<4} {:>5} spp {seconds:>7.1} s",
                 settings.width, settings.height, settings.spp
             );
-            if technique == "reference" {
+            if technique == Technique::Reference {
                 reference = Some(img);
             }
             rows.push(Row {
                 scene: name.into(),
-                technique: technique.into(),
+                technique,
                 file,
                 settings,
                 seconds,
@@ -113,131 +116,19 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
         }
         if let Some(ctx) = &gpu {
             let settings = settings_for(name, quality);
-            // Same light model as the reference (physical fall-off), 2×2 supersampled.
-            let args = crate::raster_cmd::RasterArgs {
-                attenuation: "inverse-square".into(),
-                ssaa: 2,
-                ..Default::default()
-            };
-            // Light-maps on the scenes baked light is for (texel density per scene).
-            let density = match name {
-                "cornell" => Some(32.0),
-                "room" => Some(10.0),
-                "shadows" => Some(8.0),
-                _ => None,
-            };
-            let lightmap_techniques = density
-                .map(|_| crate::bake_cmd::LIGHTMAP_TECHNIQUES.to_vec())
-                .unwrap_or_default();
-            // The SH techniques on the scene made for them: one SH light-map bake serves shl,
-            // prt-textured and shl-compressed; shl-normalmapped bakes its own.
-            let sh_techniques = if name == "prt" {
-                crate::prt_cmd::SH_TECHNIQUES.to_vec()
-            } else {
-                vec![]
-            };
-            // Light propagation volumes on the scenes of the LPV issue: the leafy bush, cornell
-            // and the room (default settings: 32³, 8 steps, RSM 256²).
-            let lpv_techniques = if matches!(name, "bush" | "cornell" | "room") {
-                crate::lpv_cmd::LPV_TECHNIQUES.to_vec()
-            } else {
-                vec![]
-            };
-            let lpv_args = crate::lpv_cmd::LpvArgs::default();
-            let sh_bake = crate::bake_cmd::BakeArgs {
-                texels_per_metre: 12.0,
-                transfer_samples: match quality {
-                    Quality::Preview => 32,
-                    Quality::Low => 64,
-                    Quality::High => 512,
-                },
-                bounces: Some(1),
-                ..Default::default()
-            };
-            let sh_args = crate::prt_cmd::ShArgs::default();
-            let mut sh_lightmaps = None;
-            for technique in crate::raster_cmd::RASTER_TECHNIQUES
-                .into_iter()
-                .chain(lightmap_techniques)
-                .chain(sh_techniques)
-                .chain(lpv_techniques)
-            {
-                let t = Instant::now();
-                let (img, times) = if crate::prt_cmd::SH_TECHNIQUES.contains(&technique) {
-                    use crate::prt_cmd::{ShData, compressed, render_sh, sh_data_for};
-                    let data = match technique {
-                        // Per-vertex transfer, and the normal-mapped SH light-maps (their own
-                        // bake, Fuchs §5.7).
-                        "prt-vertex" | "shl-normalmapped" => {
-                            sh_data_for(&scene, technique, None, &sh_bake, &sh_args)?
-                        }
-                        _ => {
-                            if sh_lightmaps.is_none() {
-                                match sh_data_for(&scene, "shl", None, &sh_bake, &sh_args)? {
-                                    ShData::Textured(sl) => sh_lightmaps = Some(sl),
-                                    _ => anyhow::bail!("the shl bake gave per-vertex data"),
-                                }
-                            }
-                            let sl = sh_lightmaps.clone().expect("baked above");
-                            if technique == "shl-compressed" {
-                                compressed(sl, &sh_args)?
-                            } else {
-                                ShData::Textured(sl)
-                            }
-                        }
-                    };
-                    render_sh(
-                        ctx,
-                        &data,
-                        technique,
-                        &args,
-                        &sh_args,
-                        settings.width,
-                        settings.height,
-                        0,
-                    )?
-                } else if crate::lpv_cmd::LPV_TECHNIQUES.contains(&technique) {
-                    crate::lpv_cmd::render_lpv(
-                        ctx,
-                        &scene,
-                        technique,
-                        &args,
-                        &lpv_args,
-                        settings.width,
-                        settings.height,
-                        0,
-                    )?
-                } else if let Some(tpm) = density.filter(|_| technique.starts_with("lightmap")) {
-                    let bake = crate::bake_cmd::BakeArgs {
-                        texels_per_metre: tpm,
-                        samples: match quality {
-                            Quality::Preview => 8,
-                            Quality::Low => 64,
-                            Quality::High => 512,
-                        },
-                        ..Default::default()
-                    };
-                    let lm = crate::bake_cmd::lightmaps_for(&scene, technique, None, &bake)?;
-                    crate::bake_cmd::render_lightmap(
-                        ctx,
-                        &lm,
-                        technique,
-                        &args,
-                        settings.width,
-                        settings.height,
-                        0,
-                    )?
-                } else {
-                    crate::raster_cmd::render_raster(
-                        ctx,
-                        &scene,
-                        technique,
-                        &args,
-                        settings.width,
-                        settings.height,
-                        0,
-                    )?
+            let mut bakes = Bakes::default();
+            for technique in demo_techniques(name) {
+                let args = demo_args(name, technique.family(), quality);
+                let req = Request {
+                    scene: &scene,
+                    technique,
+                    args: &args,
+                    width: settings.width,
+                    height: settings.height,
+                    camera: 0,
                 };
+                let t = Instant::now();
+                let (img, times) = crate::techniques::build(ctx, &req, &mut bakes)?.image(ctx)?;
                 let seconds = t.elapsed().as_secs_f64();
                 let frame_ms = if times.gpu_ms.is_empty() {
                     times.wall_ms
@@ -252,7 +143,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 );
                 rows.push(Row {
                     scene: name.into(),
-                    technique: technique.into(),
+                    technique,
                     file,
                     settings: RenderSettings {
                         spp: 0,
@@ -267,6 +158,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                     )),
                 });
             }
+            eprintln!("{name}: {} bakes shared by its techniques", bakes.len());
         }
     }
     let total = start.elapsed().as_secs_f64();
@@ -277,6 +169,70 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
     })?;
     println!("report: {}", report.display());
     Ok(())
+}
+
+/// The GPU techniques the demo shows on a scene: the Phong family everywhere, light-maps on
+/// the scenes baked light is for, the SH techniques on `prt`, the volumes on the scenes of the
+/// LPV work (the leafy bush, cornell, the room).
+fn demo_techniques(scene: &str) -> Vec<Technique> {
+    let mut families = vec![Family::Phong];
+    if lightmap_density(scene).is_some() {
+        families.push(Family::Lightmap);
+    }
+    if scene == "prt" {
+        families.push(Family::Sh);
+    }
+    if matches!(scene, "bush" | "cornell" | "room") {
+        families.push(Family::Lpv);
+    }
+    families.into_iter().flat_map(Technique::of).collect()
+}
+
+/// Light-map texel density of the scenes light-maps are baked for.
+fn lightmap_density(scene: &str) -> Option<f32> {
+    match scene {
+        "cornell" => Some(32.0),
+        "room" => Some(10.0),
+        "shadows" => Some(8.0),
+        _ => None,
+    }
+}
+
+/// The demo's options of a family's techniques: the reference's light model (physical
+/// fall-off), 2×2 supersampling, and bakes sized to the quality.
+fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
+    let raster = RasterArgs {
+        attenuation: lightlab_gpu::lights::Attenuation::InverseSquare,
+        ssaa: 2,
+        ..Default::default()
+    };
+    let bake = match family {
+        Family::Lightmap => BakeArgs {
+            texels_per_metre: lightmap_density(scene).unwrap_or(16.0),
+            samples: match quality {
+                Quality::Preview => 8,
+                Quality::Low => 64,
+                Quality::High => 512,
+            },
+            ..Default::default()
+        },
+        Family::Sh => BakeArgs {
+            texels_per_metre: 12.0,
+            transfer_samples: match quality {
+                Quality::Preview => 32,
+                Quality::Low => 64,
+                Quality::High => 512,
+            },
+            bounces: Some(1),
+            ..Default::default()
+        },
+        _ => BakeArgs::default(),
+    };
+    TechniqueArgs {
+        raster,
+        bake,
+        ..Default::default()
+    }
 }
 
 /// Write `DIR/FILE.exr` and `.png`, and measure the image against the scene's reference (every
@@ -299,6 +255,23 @@ fn save_and_compare(
     })
 }
 
+/// The error-against-cost plot of one scene's rows.
+fn scene_plot(rows: &[Row], scene: &str) -> String {
+    let points: Vec<crate::plot::Point> = rows
+        .iter()
+        .filter(|r| r.scene == scene)
+        .filter_map(|r| {
+            Some(crate::plot::Point {
+                label: r.technique.to_string(),
+                cost_ms: r.frame.as_ref().map_or(r.seconds * 1e3, |f| f.0),
+                relmse: r.error.as_ref()?.relmse as f64,
+                gpu: r.frame.is_some(),
+            })
+        })
+        .collect();
+    format!("<p>{}</p>", crate::plot::error_cost_svg(&points))
+}
+
 fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
     let mut h = String::new();
     h.push_str("<!doctype html><html><head><meta charset=\"utf-8\"><title>lightlab demo</title><style>\
@@ -307,17 +280,20 @@ fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
         figure{display:inline-block;margin:0 1em 1em 0}figcaption{font-size:90%}</style></head><body>");
     h.push_str("<h1>lightlab demo report</h1>");
     h.push_str(&format!(
-        "<p>lightlab {} · quality <b>{:?}</b> · {} threads · total {:.1} s. Technique <code>reference</code> is the \
-         path-traced ground truth (unidirectional, NEE + MIS, Russian roulette), <code>direct</code> its direct-light-only \
-         variant. <code>phong</code>, <code>phong-shadow-volumes</code> and <code>phong-shadow-maps</code> are the GPU \
-         rasterisers (Fuchs 2005 §4; forward path, 2×2 supersampling, physical inverse-square fall-off so that they \
-         compare with the reference; the ambient term is the environment's unshadowed SH irradiance; no indirect light, \
-         area lights only as emissive surfaces). Images are linear EXR beside each PNG (filmic tone curve, exposure 1).</p>",
+        "<p>lightlab {} · quality <b>{:?}</b> · {} threads · total {:.1} s. Every image is measured against the \
+         scene's <code>reference</code>. The GPU techniques use the reference's light model (physical inverse-square \
+         fall-off) and 2×2 supersampling; each bake is made once per scene and shared by the techniques that read it. \
+         Images are linear EXR beside each PNG (filmic tone curve, exposure 1). Each scene's plot shows error against \
+         cost, one point per technique.</p><ul>",
         env!("CARGO_PKG_VERSION"),
         quality,
         rayon::current_num_threads(),
         total
     ));
+    for e in crate::technique::REGISTRY {
+        h.push_str(&format!("<li><code>{}</code>: {}</li>", e.name, e.about));
+    }
+    h.push_str("</ul>");
     let mut scene = "";
     for r in rows {
         if r.scene != scene {
@@ -328,6 +304,7 @@ fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
                 lightlab_scene::builtin::describe(&r.scene).unwrap_or(""),
                 r.triangles
             ));
+            h.push_str(&scene_plot(rows, scene));
         }
         if let Some((ms, adapter)) = &r.frame {
             h.push_str(&format!(
@@ -348,7 +325,7 @@ fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
             hh = r.settings.height,
             t = r.technique,
             spp = r.settings.spp,
-            d = if r.technique == "direct" { 1 } else { r.settings.max_depth },
+            d = if r.technique == Technique::Direct { 1 } else { r.settings.max_depth },
             seed = r.settings.seed,
             s = r.seconds
         ));

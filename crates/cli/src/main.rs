@@ -1,20 +1,26 @@
-//! `lightlab`: the command line of the lightlab toolkit (see the README and DESIGN.md's
-//! command-line contract).
+//! `lightlab`: the command line of the lightlab toolkit (its contract is the README's
+//! "Commands" section).
 //!
 //! Exit codes: 0 success, 1 error (bad input, failed I/O), 2 not implemented yet.
+//!
+//! Modules: one per command (`bake_cmd`, `bench`, `demo`, `render`, `sh_cmd`, `view_cmd`);
+//! `technique` (the registry of techniques), `techniques` (the one factory of GPU renderers,
+//! by family), `options` (the option groups and their library settings), `progress`.
 
 mod bake_cmd;
 mod bench;
 mod demo;
-mod lpv_cmd;
-mod prt_cmd;
-mod raster_cmd;
+mod options;
+mod plot;
+mod progress;
 mod render;
 mod sh_cmd;
+mod technique;
+mod techniques;
 mod view_cmd;
 
 use anyhow::{Context, Result};
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Parser, Subcommand};
 use lightlab_core::color::ToneMap;
 use lightlab_core::image::{Image, LdrSettings};
 use std::path::PathBuf;
@@ -69,7 +75,7 @@ enum Command {
         #[arg(long, default_value = "baked")]
         out: PathBuf,
         #[command(flatten)]
-        options: bake_cmd::BakeArgs,
+        options: options::BakeArgs,
         /// Print the bake's figures as one JSON object on the last line.
         #[arg(long)]
         json: bool,
@@ -88,63 +94,13 @@ enum Command {
         exposure: f32,
     },
     /// Benchmarks that print figures: `trace` (ray casting), `bake`, `frame`.
-    Bench {
-        #[arg(value_enum)]
-        what: bench::BenchKind,
-        #[arg(long)]
-        scene: String,
-        #[arg(long)]
-        json: bool,
-        /// Technique, for `bench frame`.
-        #[arg(long)]
-        technique: Option<String>,
-        /// Rays per measurement, for `bench trace`.
-        #[arg(long, default_value_t = 1_000_000)]
-        rays: usize,
-        /// Also write the triangles and rays of `bench trace` to this folder (for peers).
-        #[arg(long)]
-        dump: Option<PathBuf>,
-        /// `bench trace`: ignore alpha (treat alpha-tested triangles as opaque).
-        #[arg(long)]
-        opaque: bool,
-        #[command(flatten)]
-        frame: raster_cmd::FrameBenchArgs,
-        #[command(flatten)]
-        raster: raster_cmd::RasterArgs,
-        #[command(flatten)]
-        bake: bake_cmd::BakeArgs,
-        /// `bench frame` of a light-map technique: read the light-maps from this folder
-        /// (written by `lightlab bake`) instead of baking them first.
-        #[arg(long)]
-        baked: Option<PathBuf>,
-        #[command(flatten)]
-        sh: prt_cmd::ShArgs,
-        #[command(flatten)]
-        lpv: lpv_cmd::LpvArgs,
-    },
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
     /// Spherical harmonics of environment maps: coefficients and irradiance maps.
     #[command(subcommand)]
     Sh(sh_cmd::ShCommand),
     /// Interactive viewer: a window with the GPU techniques, an orbit camera and a panel.
     View(view_cmd::ViewArgs),
-}
-
-/// Tone operator choice on the command line.
-#[derive(Clone, Copy, ValueEnum, Debug)]
-pub enum ToneArg {
-    Clamp,
-    Reinhard,
-    Filmic,
-}
-
-impl From<ToneArg> for ToneMap {
-    fn from(t: ToneArg) -> Self {
-        match t {
-            ToneArg::Clamp => ToneMap::Clamp,
-            ToneArg::Reinhard => ToneMap::Reinhard,
-            ToneArg::Filmic => ToneMap::Filmic,
-        }
-    }
 }
 
 /// An error for features that later work will add: exit code 2.
@@ -187,6 +143,16 @@ fn main() -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+/// A GPU context, with the adapter named on stderr.
+pub fn gpu_context() -> Result<lightlab_gpu::GpuContext> {
+    let ctx = lightlab_gpu::GpuContext::headless()?;
+    eprintln!(
+        "GPU: {} ({:?}, {})",
+        ctx.info.name, ctx.info.backend, ctx.info.driver
+    );
+    Ok(ctx)
 }
 
 pub fn load_scene(spec: &str, drop_degenerate: bool) -> Result<lightlab_scene::Scene> {
@@ -264,41 +230,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench {
-            what,
-            scene,
-            json,
-            technique,
-            rays,
-            dump,
-            opaque,
-            frame,
-            raster,
-            bake,
-            baked,
-            sh,
-            lpv,
-        } => {
-            if matches!(what, bench::BenchKind::Bake) {
-                return bench::bench_bake(&scene, &bake, json);
-            }
-            if matches!(what, bench::BenchKind::Frame) {
-                let t = technique.context("bench frame needs --technique")?;
-                let mut s = load_scene(&scene, false)?;
-                return raster_cmd::bench_frame(
-                    &mut s,
-                    &t,
-                    &raster,
-                    &frame,
-                    &bake,
-                    baked.as_deref(),
-                    &sh,
-                    &lpv,
-                    json,
-                );
-            }
-            bench::run(what, &scene, json, rays, dump, opaque)
-        }
+        Command::Bench(cmd) => bench::run(cmd),
         Command::Sh(cmd) => sh_cmd::run(cmd),
         Command::View(a) => view_cmd::view(&a),
     }

@@ -1,15 +1,15 @@
 //! `lightlab view`: the interactive viewer (crate `lightlab-viewer`) with the GPU techniques
 //! of `render`, built by the same settings code.
 
-use crate::bake_cmd::{BakeArgs, LIGHTMAP_TECHNIQUES, lightmap_renderer, lightmaps_for};
-use crate::raster_cmd::{RASTER_TECHNIQUES, RasterArgs, apply_brdf, settings};
-use crate::{ToneArg, load_scene};
+use crate::load_scene;
+use crate::options::{TechniqueArgs, apply_brdf};
+use crate::technique::Technique;
+use crate::techniques::{Bakes, Request, build};
 use anyhow::{Context, Result};
 use clap::Args;
-use lightlab_bake::Lightmaps;
+use lightlab_core::color::ToneMap;
 use lightlab_gpu::raster::Renderer;
 use lightlab_viewer::{ViewerConfig, run};
-use std::collections::HashMap;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -17,13 +17,10 @@ pub struct ViewArgs {
     /// A built-in scene name or a .gltf/.glb path.
     #[arg(long)]
     pub scene: String,
-    /// The technique shown first (keys 1–5 or the panel switch between them).
+    /// The technique shown first (keys 1–9 or the panel switch between the GPU techniques;
+    /// those that bake do so when first shown, unless `--baked` has their data).
     #[arg(long, default_value = "phong-shadow-volumes")]
-    pub technique: String,
-    /// Light-maps written by `lightlab bake`, for `lightmap` and `lightmap+phong` (without
-    /// it they are baked when first shown).
-    #[arg(long)]
-    pub baked: Option<PathBuf>,
+    pub technique: Technique,
     #[arg(long, default_value_t = 1280)]
     pub width: u32,
     #[arg(long, default_value_t = 720)]
@@ -33,8 +30,9 @@ pub struct ViewArgs {
     pub camera: usize,
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
-    #[arg(long, value_enum, default_value_t = ToneArg::Filmic)]
-    pub tonemap: ToneArg,
+    /// Tone operator: clamp, reinhard or filmic.
+    #[arg(long, default_value = "filmic")]
+    pub tonemap: ToneMap,
     /// Close after this many frames (scripts, tests, timing).
     #[arg(long)]
     pub frames: Option<u64>,
@@ -45,26 +43,21 @@ pub struct ViewArgs {
     #[arg(long)]
     pub drop_degenerate: bool,
     #[command(flatten)]
-    pub raster: RasterArgs,
-    #[command(flatten)]
-    pub bake: BakeArgs,
+    pub gpu: TechniqueArgs,
 }
 
 pub fn view(a: &ViewArgs) -> Result<()> {
     let mut scene = load_scene(&a.scene, a.drop_degenerate)?;
-    apply_brdf(&mut scene, a.raster.brdf.as_deref())?;
-    let techniques: Vec<String> = RASTER_TECHNIQUES
-        .iter()
-        .chain(LIGHTMAP_TECHNIQUES.iter())
-        .map(|s| s.to_string())
-        .collect();
+    apply_brdf(&mut scene, a.gpu.raster.brdf);
+    let techniques: Vec<Technique> = Technique::gpu().collect();
     let first = techniques
         .iter()
         .position(|t| *t == a.technique)
         .with_context(|| {
+            let names: Vec<&str> = techniques.iter().map(|t| t.name()).collect();
             format!(
                 "the viewer shows GPU techniques ({}), not '{}'",
-                techniques.join(", "),
+                names.join(", "),
                 a.technique
             )
         })?;
@@ -82,53 +75,50 @@ pub fn view(a: &ViewArgs) -> Result<()> {
         scene.cameras.len(),
         a.camera
     );
-    // Check the settings of every technique once, before a window opens.
-    for t in RASTER_TECHNIQUES {
-        if a.raster.shadow_variant.is_none() {
-            settings(t, &a.raster, 64, 64, a.camera)?;
-        }
-    }
-    let raster = a.raster.clone();
-    let bake = a.bake.clone();
-    let baked = a.baked.clone();
-    let mut lightmaps: HashMap<String, Lightmaps> = HashMap::new();
+    // Check the options of the first technique before a window opens.
+    a.technique.check_options(&a.gpu, false)?;
+    a.gpu.raster.settings(
+        a.technique.shadows(a.gpu.raster.shadow_variant)?,
+        64,
+        64,
+        a.camera,
+    )?;
+    let args = a.gpu.clone();
+    let mut bakes = Bakes::default();
     let scene_for_make = scene.clone();
     let camera = a.camera;
     let make = Box::new(
         move |ctx: &lightlab_gpu::GpuContext,
-              t: &str,
-              w: u32,
-              h: u32|
-              -> Result<Renderer, String> {
+              name: &str,
+              width: u32,
+              height: u32|
+              -> Result<Renderer, lightlab_viewer::MakeError> {
             let mut go = || -> Result<Renderer> {
-                if LIGHTMAP_TECHNIQUES.contains(&t) {
-                    if !lightmaps.contains_key(t) {
-                        let lm = lightmaps_for(&scene_for_make, t, baked.as_deref(), &bake)?;
-                        lightmaps.insert(t.to_string(), lm);
-                    }
-                    let lm = &lightmaps[t];
-                    lightmap_renderer(ctx, lm, t, &raster, w, h, camera)
-                } else {
-                    Ok(Renderer::new(
-                        ctx,
-                        &scene_for_make,
-                        settings(t, &raster, w, h, camera)?,
-                    )?)
-                }
+                let req = Request {
+                    scene: &scene_for_make,
+                    technique: name.parse()?,
+                    args: &args,
+                    width,
+                    height,
+                    camera,
+                };
+                let mut tr = build(ctx, &req, &mut bakes)?;
+                tr.update(ctx)?;
+                Ok(tr.renderer)
             };
-            go().map_err(|e| format!("{e:#}"))
+            go().map_err(|e| format!("{e:#}").into())
         },
     );
     let stats = run(
         ViewerConfig {
             scene,
-            techniques,
+            techniques: techniques.iter().map(|t| t.name().to_string()).collect(),
             technique: first,
             camera: a.camera,
             width: a.width,
             height: a.height,
             exposure: a.exposure,
-            tone: a.tonemap.into(),
+            tone: a.tonemap,
             frames: a.frames,
             screenshot: a.screenshot.clone(),
             screenshot_at_end: a.frames.is_some(),

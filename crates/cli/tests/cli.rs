@@ -607,8 +607,32 @@ fn bake_then_render_the_lightmap_techniques() {
     assert!(stderr(&o).contains("path method"), "{}", stderr(&o));
 }
 
+/// The GPU techniques of the registry, as `render` lists them (all but the path tracer's).
+fn gpu_techniques() -> Vec<String> {
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "cornell",
+        "--technique",
+        "?",
+        "-o",
+        "x.png",
+    ]);
+    let e = stderr(&o);
+    let known = e.split("(known: ").nth(1).expect("the known techniques");
+    known
+        .split(')')
+        .next()
+        .unwrap()
+        .split(", ")
+        .filter(|t| !["reference", "direct"].contains(t))
+        .map(String::from)
+        .collect()
+}
+
 /// The viewer opens a real window (Xvfb in CI), presents frames and shows the same image as
-/// `lightlab render` writes (the screenshot is the displayed 3D view without the panel).
+/// `lightlab render` writes (the screenshot is the displayed 3D view without the panel), for
+/// every GPU technique of the registry: baked techniques read a small bake made once.
 #[test]
 fn viewer_window_shows_what_render_writes() {
     let display =
@@ -623,40 +647,81 @@ fn viewer_window_shows_what_render_writes() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
+    let lm = dir.path().join("lm");
+    let sh = dir.path().join("sh");
+    let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    for (scene, method, extra) in [
+        (
+            "cornell",
+            "path",
+            vec!["--texels-per-metre", "8", "--gather-samples", "4"],
+        ),
+        (
+            "shadows",
+            "sh",
+            vec![
+                "--texels-per-metre",
+                "4",
+                "--transfer-samples",
+                "8",
+                "--bands",
+                "3",
+            ],
+        ),
+    ] {
+        let out = if method == "path" {
+            path(&lm)
+        } else {
+            path(&sh)
+        };
+        let mut a = vec!["bake", "--scene", scene, "--method", method, "--out", &out];
+        a.extend(extra);
+        a.push("--normal-mapped");
+        if method == "path" {
+            a.pop();
+        }
+        let o = lightlab(&a);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
     let shot = dir.path().join("view.png");
     let rendered = dir.path().join("render.png");
-    for t in ["phong-shadow-volumes", "phong-shadow-maps"] {
-        let o = lightlab(&[
-            "view",
-            "--scene",
-            "shadows",
-            "--technique",
-            t,
-            "--width",
-            "160",
-            "--height",
-            "120",
-            "--frames",
-            "3",
-            "--screenshot",
-            shot.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
+    let techniques = gpu_techniques();
+    assert!(techniques.len() >= 12, "{techniques:?}");
+    for t in &techniques {
+        let (scene, mut options) = match t.as_str() {
+            t if t.starts_with("lightmap") => ("cornell", vec!["--baked".to_string(), path(&lm)]),
+            "prt-vertex" => (
+                "shadows",
+                vec![
+                    "--transfer-samples".into(),
+                    "8".into(),
+                    "--bands".into(),
+                    "3".into(),
+                ],
+            ),
+            t if t.starts_with("prt") || t.starts_with("shl") => {
+                ("shadows", vec!["--baked".to_string(), path(&sh)])
+            }
+            t if t.starts_with("lpv") => ("cornell", vec!["--lpv-grid".into(), "8".into()]),
+            _ => ("shadows", vec![]),
+        };
+        if t == "shl-compressed" {
+            options.extend(["--sh-representatives".into(), "64".into()]);
+        }
+        let size = ["--width", "96", "--height", "72"];
+        let mut a = vec!["view", "--scene", scene, "--technique", t, "--frames", "3"];
+        a.extend(size);
+        a.extend(["--screenshot", shot.to_str().unwrap()]);
+        a.extend(options.iter().map(|s| s.as_str()));
+        let o = lightlab(&a);
+        assert!(o.status.success(), "{t}: {}", stderr(&o));
         assert!(stderr(&o).contains("viewer: 3 frames"), "{}", stderr(&o));
-        let o = lightlab(&[
-            "render",
-            "--scene",
-            "shadows",
-            "--technique",
-            t,
-            "--width",
-            "160",
-            "--height",
-            "120",
-            "-o",
-            rendered.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
+        let mut a = vec!["render", "--scene", scene, "--technique", t];
+        a.extend(size);
+        a.extend(["-o", rendered.to_str().unwrap()]);
+        a.extend(options.iter().map(|s| s.as_str()));
+        let o = lightlab(&a);
+        assert!(o.status.success(), "{t}: {}", stderr(&o));
         let o = lightlab(&[
             "compare",
             shot.to_str().unwrap(),
@@ -669,6 +734,8 @@ fn viewer_window_shows_what_render_writes() {
         // 8-bit rounding and the orbit camera's float round trip only; a different camera,
         // technique or tone curve is orders of magnitude further.
         assert!(v["relmse"].as_f64().unwrap() < 1e-3, "{t}: {last}");
+        let mean = v["mean_ratio"][0].as_f64().unwrap();
+        assert!((mean - 1.0).abs() < 0.02, "{t}: {last}");
     }
     // A technique the viewer does not show is refused before a window opens.
     let o = lightlab(&["view", "--scene", "shadows", "--technique", "reference"]);

@@ -44,6 +44,12 @@ pub enum ToneMap {
     Filmic,
 }
 
+crate::named_enum!(ToneMap, "tone operator", {
+    Clamp => "clamp",
+    Reinhard => "reinhard",
+    Filmic => "filmic",
+});
+
 impl ToneMap {
     /// Map a linear value (after exposure) to display-referred linear [0, 1].
     pub fn apply(self, c: Vec3) -> Vec3 {

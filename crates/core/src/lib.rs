@@ -10,6 +10,7 @@
 //! - [`image`]: a linear RGB float image with EXR/HDR/PNG reading and *atomic* writing
 //!   (temporary file, then rename: no half-written output on error);
 //! - [`metrics`]: RMSE, relMSE and FLIP between two images;
+//! - [`names`]: the spelling of option enums ([`named_enum!`]: parse, print, list);
 //! - [`sh`]: real spherical harmonics (the basis convention lives there), projection, rotation,
 //!   convolution, windows, triple products; [`sh_env`]: projection of environment maps;
 //! - [`quadrature`]: direction sets (exact Gauss and stratified);
@@ -27,6 +28,7 @@ pub mod color;
 pub mod image;
 pub mod lpv;
 pub mod metrics;
+pub mod names;
 pub mod param;
 pub mod quadrature;
 pub mod sampling;

@@ -400,6 +400,11 @@ pub enum Reemit {
     Central,
 }
 
+crate::named_enum!(Reemit, "re-emission", {
+    Central => "central",
+    FaceNormal => "face",
+}, aliases { "face-normal" => FaceNormal });
+
 /// One propagation step (Kaplanyan's 6-face scheme, the side faces' light re-emitted as
 /// `reemit` says): returns only the newly arrived light. With an occlusion volume, light
 /// crossing into the receiving cell is attenuated by its transmittance.

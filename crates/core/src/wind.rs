@@ -43,6 +43,17 @@ impl Default for Wind {
     }
 }
 
+/// Wind parameters that make no sense.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum WindError {
+    #[error("wind parameters must be finite")]
+    NotFinite,
+    #[error("wind amplitude and frequency must not be negative")]
+    Negative,
+    #[error("wind wavelength and height must be positive")]
+    NotPositive,
+}
+
 impl Wind {
     /// A breeze of `amplitude` metres towards `direction` (made horizontal) at time `time`.
     pub fn breeze(direction: Vec3, amplitude: f32, time: f32) -> Wind {
@@ -55,7 +66,7 @@ impl Wind {
     }
 
     /// Whether the parameters make sense (finite, non-negative sizes, a direction).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), WindError> {
         let v = [
             self.amplitude,
             self.frequency,
@@ -65,13 +76,13 @@ impl Wind {
             self.height,
         ];
         if !self.direction.is_finite() || v.iter().any(|x| !x.is_finite()) {
-            return Err("wind parameters must be finite".into());
+            return Err(WindError::NotFinite);
         }
         if self.amplitude < 0.0 || self.frequency < 0.0 {
-            return Err("wind amplitude and frequency must not be negative".into());
+            return Err(WindError::Negative);
         }
         if self.wavelength <= 0.0 || self.height <= 0.0 {
-            return Err("wind wavelength and height must be positive".into());
+            return Err(WindError::NotPositive);
         }
         Ok(())
     }

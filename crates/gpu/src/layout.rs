@@ -25,8 +25,18 @@ macro_rules! rust_layout {
     };
 }
 
+/// WGSL that naga rejects, or a struct whose layout differs from its Rust twin (the message
+/// says where).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct LayoutError(pub String);
+
 /// Parse and validate a WGSL module.
-pub fn validate_wgsl(source: &str) -> Result<naga::Module, String> {
+pub fn validate_wgsl(source: &str) -> Result<naga::Module, LayoutError> {
+    wgsl_module(source).map_err(LayoutError)
+}
+
+fn wgsl_module(source: &str) -> Result<naga::Module, String> {
     let module = naga::front::wgsl::parse_str(source).map_err(|e| e.emit_to_string(source))?;
     naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
@@ -38,8 +48,12 @@ pub fn validate_wgsl(source: &str) -> Result<naga::Module, String> {
 }
 
 /// Compare a Rust struct with the WGSL struct `name` declared in `source`.
-pub fn check_struct(source: &str, name: &str, rust: &RustLayout) -> Result<(), String> {
-    let module = validate_wgsl(source)?;
+pub fn check_struct(source: &str, name: &str, rust: &RustLayout) -> Result<(), LayoutError> {
+    struct_problem(source, name, rust).map_err(LayoutError)
+}
+
+fn struct_problem(source: &str, name: &str, rust: &RustLayout) -> Result<(), String> {
+    let module = wgsl_module(source)?;
     let (members, span) = module
         .types
         .iter()

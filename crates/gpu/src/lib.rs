@@ -1,8 +1,12 @@
 //! # lightlab-gpu
 //!
-//! The real-time half of lightlab (issue 4 onwards): a wgpu context that runs on real GPUs and,
-//! headless, on Mesa's lavapipe (Vulkan) or llvmpipe (GL); one module + one WGSL file per
-//! technique will live beside it.
+//! The real-time half of lightlab: a wgpu context that runs on real GPUs and, headless, on
+//! Mesa's lavapipe (Vulkan) or llvmpipe (GL), and the renderer of every GPU technique:
+//! `raster` (the renderer: settings, passes, pipelines, the ambient sources), `lights`
+//! (attenuation, shadow views), `shadow_volume` (CPU silhouettes), `prt` (SH transfer input and
+//! the relighting pass), `lpv` (reflective shadow maps and light propagation volumes),
+//! `gpu_scene` (the scene's buffers and materials), `resources` (textures, readback),
+//! `uniforms` (GPU-visible structs) and `layout` (WGSL validation and struct layouts).
 //!
 //! Adapter choice follows wgpu's environment variables: `WGPU_BACKEND` (`vulkan`, `gl`, …),
 //! `WGPU_ADAPTER_NAME` (a substring of the adapter name) and `WGPU_POWER_PREF`; the default is
@@ -14,6 +18,7 @@ pub mod lights;
 pub mod lpv;
 pub mod prt;
 pub mod raster;
+pub mod resources;
 pub mod shadow_volume;
 pub mod uniforms;
 

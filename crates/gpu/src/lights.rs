@@ -25,20 +25,15 @@ pub enum Attenuation {
     Fuchs4,
 }
 
+lightlab_core::named_enum!(Attenuation, "attenuation", {
+    InverseSquare => "inverse-square",
+    Fuchs1 => "fuchs1",
+    Fuchs2 => "fuchs2",
+    Fuchs3 => "fuchs3",
+    Fuchs4 => "fuchs4",
+});
+
 impl Attenuation {
-    pub const NAMES: [&'static str; 5] = ["inverse-square", "fuchs1", "fuchs2", "fuchs3", "fuchs4"];
-
-    pub fn parse(s: &str) -> Option<Attenuation> {
-        Some(match s {
-            "inverse-square" => Attenuation::InverseSquare,
-            "fuchs1" => Attenuation::Fuchs1,
-            "fuchs2" => Attenuation::Fuchs2,
-            "fuchs3" => Attenuation::Fuchs3,
-            "fuchs4" => Attenuation::Fuchs4,
-            _ => return None,
-        })
-    }
-
     fn code(self) -> u32 {
         match self {
             Attenuation::InverseSquare => 0,

@@ -108,6 +108,17 @@ impl Default for LpvSettings {
     }
 }
 
+/// Errors of the light propagation volume.
+#[derive(Debug, thiserror::Error)]
+pub enum LpvError {
+    #[error("invalid LPV settings: {0}")]
+    Settings(String),
+    #[error("the volume has no cascade {0}")]
+    NoCascade(usize),
+    #[error(transparent)]
+    Readback(#[from] crate::resources::ReadbackError),
+}
+
 impl LpvSettings {
     pub fn iterations(&self) -> u32 {
         self.iterations.unwrap_or(match self.scheme {
@@ -116,7 +127,12 @@ impl LpvSettings {
         })
     }
 
-    pub fn validate(&self) -> Result<(), String> {
+    /// Refuse settings out of range or that the scheme does not have.
+    pub fn validate(&self) -> Result<(), LpvError> {
+        self.problem().map_err(LpvError::Settings)
+    }
+
+    fn problem(&self) -> Result<(), String> {
         if !(4..=256).contains(&self.grid) {
             return Err(format!("LPV grid {} must be within 4..=256", self.grid));
         }
@@ -439,7 +455,7 @@ impl Lpv {
         camera: &lightlab_scene::Camera,
         aspect: f32,
         wind: &lightlab_core::wind::Wind,
-    ) -> Result<Lpv, String> {
+    ) -> Result<Lpv, LpvError> {
         settings.validate()?;
         let device = &ctx.device;
         let eye = camera.position();
@@ -545,7 +561,7 @@ impl Lpv {
             .iter()
             .zip(["rsm flux", "rsm normal", "rsm position"])
             .map(|(f, label)| {
-                crate::raster::texture(
+                crate::resources::texture(
                     device,
                     label,
                     size,
@@ -562,7 +578,7 @@ impl Lpv {
             .iter()
             .map(|t| t.create_view(&Default::default()))
             .collect();
-        let rsm_depth = crate::raster::texture(
+        let rsm_depth = crate::resources::texture(
             device,
             "rsm depth",
             size,
@@ -849,10 +865,9 @@ impl Lpv {
 
     /// The last light's RSM read back, row-major: flux (+0), unit normal + diffuse
     /// transmission, position + texel area (0 where the light sees nothing).
-    pub fn read_rsm(&self, ctx: &GpuContext) -> Result<[Vec<[f32; 4]>; 3], String> {
-        let read = |i: usize, bpp: u32| {
-            crate::raster::read_texture(ctx, &self.rsm_textures[i], bpp).map_err(|e| e.to_string())
-        };
+    pub fn read_rsm(&self, ctx: &GpuContext) -> Result<[Vec<[f32; 4]>; 3], LpvError> {
+        let read =
+            |i: usize, bpp: u32| crate::resources::read_texture(ctx, &self.rsm_textures[i], bpp);
         let half4 = |b: Vec<u8>| -> Vec<[f32; 4]> {
             bytemuck::cast_slice::<u8, [half::f16; 4]>(&b)
                 .iter()
@@ -999,15 +1014,15 @@ impl Lpv {
         &self,
         ctx: &GpuContext,
         cascade: usize,
-    ) -> Result<lightlab_core::lpv::Volume, String> {
+    ) -> Result<lightlab_core::lpv::Volume, LpvError> {
         let grid = *self
             .grids
             .get(cascade)
-            .ok_or_else(|| format!("no cascade {cascade}"))?;
+            .ok_or(LpvError::NoCascade(cascade))?;
         let mut vol = lightlab_core::lpv::Volume::new(grid);
         let first = grid.len() * cascade;
         for (ch, tex) in self.textures.iter().enumerate() {
-            let data = crate::raster::read_texture(ctx, tex, 8).map_err(|e| e.to_string())?;
+            let data = crate::resources::read_texture(ctx, tex, 8)?;
             let halves: &[u16] = &bytemuck::cast_slice(&data)[first * 4..];
             for (i, cell) in vol.cells.iter_mut().enumerate() {
                 for k in 0..4 {

@@ -38,15 +38,13 @@ pub enum ShFilter {
     FourTap,
 }
 
+lightlab_core::named_enum!(ShFilter, "SH light-map filter", {
+    Nearest => "nearest",
+    Bilinear => "bilinear",
+    FourTap => "4tap",
+}, aliases { "four-tap" => FourTap });
+
 impl ShFilter {
-    pub fn parse(s: &str) -> Option<ShFilter> {
-        match s {
-            "nearest" => Some(ShFilter::Nearest),
-            "bilinear" => Some(ShFilter::Bilinear),
-            "4tap" | "four-tap" => Some(ShFilter::FourTap),
-            _ => None,
-        }
-    }
     pub fn code(self) -> u32 {
         match self {
             ShFilter::Nearest => 0,
@@ -96,9 +94,19 @@ pub fn layers(bands: usize) -> usize {
     (bands * bands).div_ceil(4)
 }
 
+/// SH transfer that the renderer cannot take.
+#[derive(Debug, thiserror::Error)]
+#[error("SH transfer does not fit: {0}")]
+pub struct ShInputError(pub String);
+
 impl ShInput<'_> {
     /// Check the input against the scene (instance count, vertex counts, sizes).
-    pub fn validate(&self, scene: &lightlab_scene::Scene) -> Result<(), String> {
+    /// Refuse transfer that does not match the scene or the GPU's limits.
+    pub fn validate(&self, scene: &lightlab_scene::Scene) -> Result<(), ShInputError> {
+        self.problem(scene).map_err(ShInputError)
+    }
+
+    fn problem(&self, scene: &lightlab_scene::Scene) -> Result<(), String> {
         if !(1..=8).contains(&self.bands) {
             return Err(format!("SH bands must be 1 to 8, not {}", self.bands));
         }

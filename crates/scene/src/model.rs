@@ -162,28 +162,14 @@ pub enum BrdfModel {
     BlinnPhong,
 }
 
+lightlab_core::named_enum!(BrdfModel, "BRDF model", {
+    Pbr => "pbr",
+    Lambert => "lambert",
+    Phong => "phong",
+    BlinnPhong => "blinn-phong",
+});
+
 impl BrdfModel {
-    pub const NAMES: [&'static str; 4] = ["pbr", "lambert", "phong", "blinn-phong"];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            BrdfModel::Pbr => "pbr",
-            BrdfModel::Lambert => "lambert",
-            BrdfModel::Phong => "phong",
-            BrdfModel::BlinnPhong => "blinn-phong",
-        }
-    }
-
-    pub fn parse(s: &str) -> Option<BrdfModel> {
-        Some(match s {
-            "pbr" => BrdfModel::Pbr,
-            "lambert" => BrdfModel::Lambert,
-            "phong" => BrdfModel::Phong,
-            "blinn-phong" => BrdfModel::BlinnPhong,
-            _ => return None,
-        })
-    }
-
     /// The Phong/Blinn-Phong exponent of a roughness (clamped to [1, 10⁴]).
     pub fn exponent(roughness: f32) -> f32 {
         let a2 = (roughness * roughness).powi(2).max(1e-6);

@@ -167,7 +167,7 @@ pub fn display_to_rgb8(
     height: u32,
     exposure: f32,
     tone: ToneMap,
-) -> Result<Vec<[u8; 3]>, String> {
+) -> Result<Vec<[u8; 3]>, lightlab_gpu::resources::ReadbackError> {
     let format = wgpu::TextureFormat::Rgba8Unorm;
     let display = Display::new(&ctx.device, format);
     let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -194,7 +194,7 @@ pub fn display_to_rgb8(
         tone,
     );
     ctx.queue.submit([enc.finish()]);
-    let bytes = lightlab_gpu::raster::read_texture(ctx, &tex, 4).map_err(|e| e.to_string())?;
+    let bytes = lightlab_gpu::resources::read_texture(ctx, &tex, 4)?;
     Ok(bytes.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect())
 }
 

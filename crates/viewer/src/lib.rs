@@ -38,7 +38,10 @@ use winit::window::{Window, WindowId};
 /// Builds the renderer of technique `name` at `width`×`height` (the viewer then sets its
 /// camera). Errors are shown in the panel; the previous renderer stays.
 pub type MakeRenderer<'a> =
-    Box<dyn FnMut(&GpuContext, &str, u32, u32) -> Result<Renderer, String> + 'a>;
+    Box<dyn FnMut(&GpuContext, &str, u32, u32) -> Result<Renderer, MakeError> + 'a>;
+
+/// Why a technique's renderer could not be built (shown in the panel).
+pub type MakeError = Box<dyn std::error::Error + Send + Sync>;
 
 /// What the viewer opens.
 pub struct ViewerConfig {
@@ -76,8 +79,11 @@ pub enum ViewerError {
     Surface(String),
     #[error("technique '{technique}': {message}")]
     Renderer { technique: String, message: String },
-    #[error("writing the screenshot {path}: {message}")]
-    Screenshot { path: PathBuf, message: String },
+    #[error("writing the screenshot {path}: {source}")]
+    Screenshot {
+        path: PathBuf,
+        source: ScreenshotError,
+    },
     #[error("the scene has no camera {0}")]
     NoCamera(usize),
 }
@@ -303,7 +309,7 @@ impl App<'_> {
                 Err(message) if gfx.renderer.is_none() => {
                     self.result = Err(ViewerError::Renderer {
                         technique: name,
-                        message,
+                        message: message.to_string(),
                     });
                     event_loop.exit();
                     return;
@@ -484,8 +490,8 @@ impl App<'_> {
             let path = self.cfg.screenshot.clone();
             match screenshot(&gfx.ctx, renderer, &path, self.exposure, self.tone) {
                 Ok(()) => self.stats.screenshots.push(path),
-                Err(message) => {
-                    self.fail(event_loop, ViewerError::Screenshot { path, message });
+                Err(source) => {
+                    self.fail(event_loop, ViewerError::Screenshot { path, source });
                     return;
                 }
             }
@@ -505,20 +511,32 @@ fn screenshot(
     path: &Path,
     exposure: f32,
     tone: ToneMap,
-) -> Result<(), String> {
+) -> Result<(), ScreenshotError> {
     let (w, h) = (r.settings.width, r.settings.height);
     let px = display_to_rgb8(ctx, r.hdr_view(), w, h, exposure, tone)?;
     let bytes: Vec<u8> = px.iter().flatten().copied().collect();
-    lightlab_core::image::write_atomic(path, |f| -> Result<(), lightlab_core::image::ImageError> {
-        use image::ImageEncoder;
-        image::codecs::png::PngEncoder::new(std::io::BufWriter::new(f))
-            .write_image(&bytes, w, h, image::ExtendedColorType::Rgb8)
-            .map_err(|e| lightlab_core::image::ImageError::Encode {
-                path: path.to_path_buf(),
-                message: e.to_string(),
-            })
-    })
-    .map_err(|e| e.to_string())
+    lightlab_core::image::write_atomic(
+        path,
+        |f| -> Result<(), lightlab_core::image::ImageError> {
+            use image::ImageEncoder;
+            image::codecs::png::PngEncoder::new(std::io::BufWriter::new(f))
+                .write_image(&bytes, w, h, image::ExtendedColorType::Rgb8)
+                .map_err(|e| lightlab_core::image::ImageError::Encode {
+                    path: path.to_path_buf(),
+                    message: e.to_string(),
+                })
+        },
+    )?;
+    Ok(())
+}
+
+/// Why a screenshot failed: the GPU readback or the PNG file.
+#[derive(Debug, thiserror::Error)]
+pub enum ScreenshotError {
+    #[error(transparent)]
+    Readback(#[from] lightlab_gpu::resources::ReadbackError),
+    #[error(transparent)]
+    Write(#[from] lightlab_core::image::ImageError),
 }
 
 impl ApplicationHandler for App<'_> {

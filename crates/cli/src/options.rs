@@ -1,0 +1,539 @@
+//! The options of the GPU techniques and of the bakers, grouped by what reads them, with their
+//! conversion to the libraries' settings. Library enums are parsed by their own `FromStr`
+//! (`lightlab_core::named_enum!`).
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, ValueEnum};
+use lightlab_bake::prt::{TransferKind, TransferSettings};
+use lightlab_bake::sh_light::{SamplePoints, ShLightSettings};
+use lightlab_bake::view::Filter;
+use lightlab_bake::{BakeSettings, LightMode, Method};
+use lightlab_core::lpv::Reemit;
+use lightlab_core::sh::Window;
+use lightlab_gpu::lights::Attenuation;
+use lightlab_gpu::lpv::{LpvScheme, LpvSettings};
+use lightlab_gpu::prt::ShFilter;
+use lightlab_gpu::raster::{Ambient, RasterSettings, RenderPath, ShadowMethod};
+use lightlab_scene::{BrdfModel, Scene};
+use std::path::PathBuf;
+
+/// Every option a GPU technique may read: the renderer's, the bakers' (techniques that bake
+/// first), the SH light's and the volume's, and the folder of baked data.
+#[derive(Args, Clone, Debug, Default)]
+pub struct TechniqueArgs {
+    /// Folder of baked data (`lightlab bake`), for the light-map and SH techniques; without it
+    /// they bake first.
+    #[arg(long)]
+    pub baked: Option<PathBuf>,
+    #[command(flatten)]
+    pub raster: RasterArgs,
+    #[command(flatten)]
+    pub bake: BakeArgs,
+    #[command(flatten)]
+    pub sh: ShArgs,
+    #[command(flatten)]
+    pub lpv: LpvArgs,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum VariantArg {
+    /// Shadow volumes: z-fail with capped volumes (robust; the default).
+    Zfail,
+    /// Shadow volumes: z-pass (wrong when the camera is inside a volume).
+    Zpass,
+    /// Shadow maps: hardware depth comparison (the default).
+    Depth,
+    /// Shadow maps: Heidrich's linear-depth comparison.
+    Linear,
+    /// Projected planar shadows on the largest floor plane (Heidrich §6.1).
+    Planar,
+}
+
+/// Options of the GPU renderer.
+#[derive(Args, Clone, Debug)]
+pub struct RasterArgs {
+    /// Wind sway of foliage [m at the tips] (materials' `extras.lightlab.sway`), the same in
+    /// every pass; needs shadow maps, not volumes. `bench frame` animates it at 60 Hz.
+    #[arg(long, default_value_t = 0.0)]
+    pub wind: f32,
+    /// The wind's time [s] (its gusts' phase).
+    #[arg(long, default_value_t = 0.0)]
+    pub wind_time: f32,
+    /// forward (one scene pass per light) or deferred (G-buffer, one screen pass per light).
+    #[arg(long, default_value = "forward")]
+    pub path: RenderPath,
+    /// Attenuation of point and spot lights: inverse-square (physical, as the reference) or
+    /// Fuchs's fuchs1..fuchs4 (fuchs4 = 1 − (d/r)², the thesis's choice).
+    #[arg(long, default_value = "fuchs4")]
+    pub attenuation: Attenuation,
+    /// Radius r of the Fuchs attenuation functions (default: the glTF range, else
+    /// √(I/0.05 lx)).
+    #[arg(long)]
+    pub light_radius: Option<f32>,
+    /// Shade every material with this model: pbr, lambert, phong or blinn-phong (default: each
+    /// material's own). Applies to the reference techniques too.
+    #[arg(long)]
+    pub brdf: Option<BrdfModel>,
+    /// Shadow variant: zfail|zpass (shadow volumes), depth|linear|planar (shadow maps).
+    #[arg(long, value_enum)]
+    pub shadow_variant: Option<VariantArg>,
+    /// Light-map sampling of `lightmap` and `lightmap+phong`: bilinear or bicubic.
+    #[arg(long, default_value = "bilinear")]
+    pub lightmap_filter: Filter,
+    /// Ambient term: `env` (the scene's environment as 9 SH coefficients), `none`, or a
+    /// constant sky radiance `r,g,b`.
+    #[arg(long, default_value = "env")]
+    pub ambient: Ambient,
+    /// Shadow-map resolution (per layer).
+    #[arg(long, default_value_t = 2048)]
+    pub shadow_size: u32,
+    /// PCF kernel half-width in texels (0 = one bilinear comparison).
+    #[arg(long, default_value_t = 1)]
+    pub pcf: i32,
+    /// Supersampling factor per axis (renders ssaa² samples per pixel).
+    #[arg(long, default_value_t = 1)]
+    pub ssaa: u32,
+    /// Leave the background black instead of drawing the environment where no surface is
+    /// seen (the path tracer draws it, so the default keeps renders comparable).
+    #[arg(long)]
+    pub no_background: bool,
+    /// Do not light with the scene's planar emitters as area lights (cornell's lamp): only its
+    /// punctual lights light the surfaces directly. Light-map and SH techniques never use them
+    /// (their bakes hold that light).
+    #[arg(long)]
+    pub no_area_lights: bool,
+}
+
+impl Default for RasterArgs {
+    fn default() -> Self {
+        RasterArgs {
+            wind: 0.0,
+            wind_time: 0.0,
+            path: RenderPath::Forward,
+            attenuation: Attenuation::Fuchs4,
+            light_radius: None,
+            brdf: None,
+            shadow_variant: None,
+            lightmap_filter: Filter::Bilinear,
+            ambient: Ambient::Environment,
+            shadow_size: 2048,
+            pcf: 1,
+            ssaa: 1,
+            no_background: false,
+            no_area_lights: false,
+        }
+    }
+}
+
+impl RasterArgs {
+    /// The renderer settings with these options and shadow method, at `width`×`height` before
+    /// supersampling.
+    pub fn settings(
+        &self,
+        shadows: ShadowMethod,
+        width: u32,
+        height: u32,
+        camera: usize,
+    ) -> Result<RasterSettings> {
+        if !(1..=8).contains(&self.ssaa) {
+            bail!("--ssaa must be 1 to 8");
+        }
+        if let Some(r) = self.light_radius
+            && !(r.is_finite() && r > 0.0)
+        {
+            bail!("--light-radius must be a positive number");
+        }
+        let wind = lightlab_core::wind::Wind::breeze(
+            glam::Vec3::new(1.0, 0.0, 0.4),
+            self.wind,
+            self.wind_time,
+        );
+        wind.validate().context("--wind")?;
+        Ok(RasterSettings {
+            width: width * self.ssaa,
+            height: height * self.ssaa,
+            camera,
+            path: self.path,
+            shadows,
+            attenuation: self.attenuation,
+            light_radius: self.light_radius,
+            ambient: self.ambient,
+            shadow_size: self.shadow_size,
+            pcf_radius: self.pcf,
+            wind,
+            background: !self.no_background,
+            area_lights: !self.no_area_lights,
+            ..Default::default()
+        })
+    }
+}
+
+/// Apply `--brdf` to the scene (before any technique renders it).
+pub fn apply_brdf(scene: &mut Scene, brdf: Option<BrdfModel>) {
+    if let Some(m) = brdf {
+        scene.set_brdf(m);
+    }
+}
+
+/// Options of the bakers (`lightlab bake`, and the techniques that bake first).
+#[derive(Args, Clone, Debug)]
+pub struct BakeArgs {
+    /// Light-map texel density (texels per metre). Walls need two texels of thickness for
+    /// bilinear sampling and four for bicubic, or light crosses them.
+    #[arg(long, default_value_t = 16.0)]
+    pub texels_per_metre: f32,
+    /// Path-traced gathering: paths per texel.
+    #[arg(id = "gather_samples", long = "gather-samples", default_value_t = 128)]
+    pub samples: u32,
+    /// Path-traced gathering: largest number of scattering events (1 = direct light only).
+    #[arg(id = "gather_depth", long = "gather-depth", default_value_t = 16)]
+    pub max_depth: u32,
+    /// Path-traced gathering: also bake directional light-maps (three-direction basis, a
+    /// third of the samples each: twice the bake time) so normal-mapped surfaces respond to
+    /// baked light.
+    #[arg(long)]
+    pub directional: bool,
+    /// Radiosity and SH shooting: shooter block size n (n×n patches, CaLight's BlockSize, 1..8).
+    #[arg(long, default_value_t = 3)]
+    pub block_size: u32,
+    /// Radiosity and SH shooting: stop when no patch (block) holds more unshot radiosity
+    /// (transfer) than this fraction of the largest initial one (CaLight's StopUE, relative).
+    #[arg(long, default_value_t = 1e-4)]
+    pub stop: f64,
+    /// How punctual lights enter the bake: `all=MODE` or `NAME=MODE`, MODE one of baked,
+    /// indirect-only, realtime (comma-separated; default: all baked).
+    #[arg(long, value_delimiter = ',')]
+    pub light_mode: Vec<String>,
+    /// Also write tone-reproduced PNG pages (Ward Larson histogram adjustment, gamma 2).
+    #[arg(long)]
+    pub png: bool,
+    /// Also write `scene.glb`: the scene with page-space TEXCOORD_1 per instance and the pages
+    /// embedded (as PNG; node extras name the EXR), for other engines. Implies --png.
+    #[arg(long)]
+    pub gltf: bool,
+    #[arg(long, default_value_t = 0)]
+    pub bake_seed: u64,
+    /// `--method sh`: SH bands (l_max + 1), 1..8; 4 as Fuchs, 5 as McKenzie Chapter.
+    #[arg(long, default_value_t = 4)]
+    pub bands: usize,
+    /// `--method sh`: unshadowed, shadowed, interreflected (bounces gathered) or shooting
+    /// (CaSHL: bounces shot between texels to `--stop`, grouped by `--block-size`) transfer.
+    #[arg(long, default_value = "interreflected")]
+    pub transfer: String,
+    /// `--method sh`: bounces of inter-reflected transfer (default 2). With `--technique
+    /// reference`: light that bounced at most this many times before reaching the surface seen
+    /// (exactly this many with `--indirect-only`; default 1 then).
+    #[arg(long)]
+    pub bounces: Option<u32>,
+    /// `--method sh`: directions per texel and vertex.
+    #[arg(long, default_value_t = 256)]
+    pub transfer_samples: u32,
+    /// `--method sh`: texel normals from the materials' normal maps, averaged over each texel
+    /// (Fuchs §5.7; the data of `shl-normalmapped`).
+    #[arg(long)]
+    pub normal_mapped: bool,
+    /// `--method sh`: bake decimated meshes (glTF mesh extras.lightlab.detailSource) as they
+    /// are, instead of taking position, normal and occlusion from their high-poly source.
+    #[arg(long)]
+    pub no_detail: bool,
+    /// `--method sh`: how far (fraction of the source mesh's bounding-box diagonal) a decimated
+    /// texel searches along its normal for the high-poly surface.
+    #[arg(long, default_value_t = 0.05)]
+    pub detail_cage: f32,
+    /// `--method sh`: also write the k-means compressed copy with this many representatives
+    /// (Fuchs §5.6; `indices-K.bin` + `representatives.bin`, read by `shl-compressed`).
+    #[arg(long)]
+    pub compress: Option<usize>,
+}
+
+impl Default for BakeArgs {
+    fn default() -> Self {
+        BakeArgs {
+            texels_per_metre: 16.0,
+            samples: 128,
+            max_depth: 16,
+            directional: false,
+            block_size: 3,
+            stop: 1e-4,
+            light_mode: vec![],
+            png: false,
+            gltf: false,
+            bake_seed: 0,
+            bands: 4,
+            transfer: "interreflected".into(),
+            bounces: None,
+            transfer_samples: 256,
+            normal_mapped: false,
+            no_detail: false,
+            detail_cage: 0.05,
+            compress: None,
+        }
+    }
+}
+
+impl BakeArgs {
+    /// The light-map settings for `method` on `scene`.
+    pub fn settings(&self, scene: &Scene, method: Method) -> Result<BakeSettings> {
+        let mut s = BakeSettings {
+            method,
+            seed: self.bake_seed,
+            ..Default::default()
+        };
+        s.layout.texels_per_metre = self.texels_per_metre;
+        s.gather.samples = self.samples;
+        s.gather.max_depth = self.max_depth;
+        s.gather.directional = self.directional;
+        s.radiosity.block_size = self.block_size;
+        s.radiosity.stop = self.stop;
+        s.light_modes = self.light_modes(scene)?;
+        Ok(s)
+    }
+
+    /// `--light-mode`, one mode per scene light (default: all baked).
+    fn light_modes(&self, scene: &Scene) -> Result<Vec<LightMode>> {
+        let mut modes = vec![LightMode::Baked; scene.lights.len()];
+        for item in &self.light_mode {
+            let (name, mode) = item
+                .split_once('=')
+                .with_context(|| format!("--light-mode '{item}' is not NAME=MODE"))?;
+            let mode: LightMode = mode.parse()?;
+            if name == "all" {
+                modes.iter_mut().for_each(|m| *m = mode);
+                continue;
+            }
+            let i = scene
+                .lights
+                .iter()
+                .position(|l| l.name == name)
+                .with_context(|| {
+                    let names: Vec<&str> = scene.lights.iter().map(|l| l.name.as_str()).collect();
+                    format!(
+                        "the scene has no light '{name}' (lights: {})",
+                        names.join(", ")
+                    )
+                })?;
+            modes[i] = mode;
+        }
+        Ok(modes)
+    }
+
+    /// The SH transfer settings (`bake --method sh|prt`, the SH techniques).
+    pub fn transfer_settings(&self) -> Result<TransferSettings> {
+        let kind = match self.transfer.as_str() {
+            "unshadowed" => TransferKind::Unshadowed,
+            "shadowed" => TransferKind::Shadowed,
+            "interreflected" => TransferKind::Interreflected {
+                bounces: self.bounces.unwrap_or(2),
+            },
+            "shooting" => TransferKind::Shooting(lightlab_bake::cashl::ShootSettings {
+                block_size: self.block_size,
+                stop: self.stop as f32,
+                ..Default::default()
+            }),
+            t => bail!(
+                "--transfer must be unshadowed, shadowed, interreflected or shooting, not '{t}'"
+            ),
+        };
+        if !(self.detail_cage > 0.0 && self.detail_cage.is_finite()) {
+            bail!(
+                "--detail-cage must be a positive fraction, not {}",
+                self.detail_cage
+            );
+        }
+        Ok(TransferSettings {
+            bands: self.bands,
+            samples: self.transfer_samples,
+            kind,
+            seed: self.bake_seed,
+            detail: (!self.no_detail).then_some(lightlab_bake::detail::DetailSettings {
+                cage: self.detail_cage,
+            }),
+            normal_mapped: self.normal_mapped,
+        })
+    }
+}
+
+/// Run-time options of the SH techniques.
+#[derive(Args, Clone, Debug)]
+pub struct ShArgs {
+    /// Incident-light sample points: `scene` (one at the scene's centre: distant light, the
+    /// default of shl*) or `object` (six per instance at its box faces, blended by 1/distance:
+    /// McKenzie §4.3, the default of prt-*).
+    #[arg(long)]
+    pub sh_points: Option<String>,
+    /// Window on the light against ringing: none, hann or lanczos (default: hann for prt-*,
+    /// none for shl*).
+    #[arg(long)]
+    pub sh_window: Option<String>,
+    /// Window width W in bands (default: the band count, McKenzie's normalisation).
+    #[arg(long)]
+    pub sh_window_size: Option<f64>,
+    /// Reads of `shl-compressed`: nearest, bilinear (of the relit representatives) or 4tap
+    /// (Fuchs §5.8). Default bilinear.
+    #[arg(long)]
+    pub sh_filter: Option<ShFilter>,
+    /// Representatives of `shl-compressed` (Fuchs §5.6; at most 65536).
+    #[arg(long, default_value_t = 4096)]
+    pub sh_representatives: usize,
+}
+
+impl Default for ShArgs {
+    fn default() -> Self {
+        ShArgs {
+            sh_points: None,
+            sh_window: None,
+            sh_window_size: None,
+            sh_filter: None,
+            sh_representatives: 4096,
+        }
+    }
+}
+
+impl ShArgs {
+    /// The run-time light settings; `prt` selects the defaults of the prt-* techniques
+    /// (per-object points, Hann window).
+    pub fn light_settings(&self, prt: bool, bands: usize) -> Result<ShLightSettings> {
+        let points = match self.sh_points.as_deref() {
+            None if prt => SamplePoints::PerObject,
+            None | Some("scene") => SamplePoints::Scene,
+            Some("object") => SamplePoints::PerObject,
+            Some(p) => bail!("--sh-points must be scene or object, not '{p}'"),
+        };
+        let size = self.sh_window_size.unwrap_or(bands as f64);
+        anyhow::ensure!(
+            size.is_finite() && size > 0.0,
+            "--sh-window-size must be a positive number"
+        );
+        let window = match self.sh_window.as_deref() {
+            None if prt => Window::Hann { size },
+            None | Some("none") => Window::None,
+            Some("hann") => Window::Hann { size },
+            Some("lanczos") => Window::Lanczos { size },
+            Some(w) => bail!("--sh-window must be none, hann or lanczos, not '{w}'"),
+        };
+        Ok(ShLightSettings {
+            bands,
+            points,
+            window,
+            environment: true,
+            punctual: true,
+        })
+    }
+}
+
+/// What `--debug-view` shows. Layers are written as linear values (the G-buffer's and the
+/// RSM's at their own resolution); `--tonemap clamp` shows normals and albedo as stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum DebugView {
+    /// The full frame.
+    Final,
+    /// Only the volume's indirect light (diffuse albedo/π × its irradiance).
+    Indirect,
+    /// G-buffer: diffuse reflectance.
+    Albedo,
+    /// G-buffer: shading normal, n/2 + ½.
+    Normal,
+    /// G-buffer: specular F0 (r), roughness (g), diffuse transmission (b).
+    Material,
+    /// G-buffer: distance from the camera over the largest distance seen.
+    Depth,
+    /// RSM of the last light: reflected (and transmitted) flux per texel over the largest.
+    RsmFlux,
+    /// RSM: surface normal towards the light, n/2 + ½.
+    RsmNormal,
+    /// RSM: world position, mapped to the volume's box ([0, 1]³).
+    RsmPosition,
+    /// The scene's (coarsest) volume's z-slices side by side (row-major from z = 0): mean
+    /// radiance of each cell, I₀/s² [W/(m²·sr)].
+    LpvSlices,
+}
+
+impl DebugView {
+    /// Whether the view shows a G-buffer layer (only the deferred path writes one).
+    pub fn gbuffer(self) -> bool {
+        matches!(
+            self,
+            DebugView::Albedo | DebugView::Normal | DebugView::Material | DebugView::Depth
+        )
+    }
+}
+
+/// Options of the LPV techniques.
+#[derive(Args, Clone, Debug)]
+pub struct LpvArgs {
+    /// Cells per axis of the light propagation volume.
+    #[arg(long, default_value_t = 32)]
+    pub lpv_grid: u32,
+    /// Propagation steps (default: 8 for `lpv`, 2 for `lpv-faithful`).
+    #[arg(long)]
+    pub lpv_iterations: Option<u32>,
+    /// Reflective-shadow-map side in texels (default: for `lpv` 32 per cell of the grid, 256 to
+    /// 2048, see `lightlab_gpu::lpv::rsm_size_for_grid`; for `lpv-faithful` 256, the report's
+    /// §5.3 setup).
+    #[arg(long)]
+    pub rsm_size: Option<u32>,
+    /// `lpv`: propagate without the geometry volume (light leaks through walls).
+    #[arg(long)]
+    pub no_lpv_occlusion: bool,
+    /// `lpv`: damping against self-illumination, in cells (the lookup keeps the smaller of the
+    /// irradiance at the surface and this far out along the normal); 0 turns it off.
+    #[arg(long, default_value_t = 2.0)]
+    pub lpv_damping: f32,
+    /// `lpv`: nested volumes; the coarsest fits the scene, each finer one halves the cell and
+    /// follows the camera in whole cells.
+    #[arg(long, default_value_t = 1)]
+    pub lpv_cascades: u32,
+    /// `lpv`: let the cascades follow the camera continuously instead of in whole cells
+    /// (shows the flicker that snapping prevents).
+    #[arg(long)]
+    pub no_lpv_snap: bool,
+    /// `lpv`: how light crossing a cell's side faces is re-emitted: `central` along the
+    /// direction it travelled (keeps it going; the default), `face` around the face's normal
+    /// (Kaplanyan & Dachsbacher's original, more diffusive).
+    #[arg(long, default_value = "central")]
+    pub lpv_reemit: Reemit,
+    /// What to show: the final frame, the volume's indirect light only, or a layer.
+    #[arg(long, value_enum, default_value_t = DebugView::Final)]
+    pub debug_view: DebugView,
+}
+
+impl Default for LpvArgs {
+    fn default() -> Self {
+        LpvArgs {
+            lpv_grid: 32,
+            lpv_iterations: None,
+            rsm_size: None,
+            no_lpv_occlusion: false,
+            lpv_damping: 2.0,
+            lpv_cascades: 1,
+            no_lpv_snap: false,
+            lpv_reemit: Reemit::Central,
+            debug_view: DebugView::Final,
+        }
+    }
+}
+
+impl LpvArgs {
+    /// The volume's settings for a scheme (`lpv`: Kaplanyan, `lpv-faithful`: WPI).
+    pub fn settings(&self, scheme: LpvScheme) -> Result<LpvSettings> {
+        let faithful = scheme == LpvScheme::Wpi;
+        let s = LpvSettings {
+            scheme,
+            grid: self.lpv_grid,
+            iterations: self.lpv_iterations,
+            rsm_size: self.rsm_size.unwrap_or(if faithful {
+                256
+            } else {
+                lightlab_gpu::lpv::rsm_size_for_grid(self.lpv_grid)
+            }),
+            occlusion: !self.no_lpv_occlusion,
+            damping: self.lpv_damping,
+            cascades: self.lpv_cascades,
+            snap: !self.no_lpv_snap,
+            reemit: self.lpv_reemit,
+            ..Default::default()
+        };
+        s.validate()?;
+        Ok(s)
+    }
+}

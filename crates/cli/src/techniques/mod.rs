@@ -1,0 +1,122 @@
+//! The one factory of GPU techniques: a technique, a scene and its options become a
+//! [`TechniqueRenderer`], with the baked data the technique needs (read from `--baked`, or baked
+//! once and shared through [`Bakes`]). `render`, `demo`, `bench frame` and `view` all build
+//! through [`build`]; each family's module (`phong`, `lightmap`, `sh`, `lpv`) reads its own
+//! options.
+
+pub mod lightmap;
+mod lpv;
+pub mod sh;
+
+use crate::options::{DebugView, TechniqueArgs};
+use crate::technique::{Family, Technique};
+use anyhow::{Result, bail};
+use lightlab_bake::Lightmaps;
+use lightlab_bake::prt::VertexTransfer;
+use lightlab_bake::sh_light::ShProjector;
+use lightlab_core::image::Image;
+use lightlab_gpu::GpuContext;
+use lightlab_gpu::raster::{FrameTimes, Renderer};
+use lightlab_scene::Scene;
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// What to build: a technique on a scene with its options, at `width`×`height` (before
+/// supersampling) from scene camera `camera`.
+pub struct Request<'a> {
+    pub scene: &'a Scene,
+    pub technique: Technique,
+    pub args: &'a TechniqueArgs,
+    pub width: u32,
+    pub height: u32,
+    pub camera: usize,
+}
+
+/// Baked data made or read so far, keyed by folder or by bake settings, so that techniques
+/// built from the same bake share it (the demo and the viewer build many).
+#[derive(Default)]
+pub struct Bakes {
+    lightmaps: HashMap<String, Lightmaps>,
+    sh: HashMap<String, sh::StoredSh>,
+    vertex: HashMap<String, VertexTransfer>,
+}
+
+impl Bakes {
+    /// How many bakes (or folder reads) were made.
+    pub fn len(&self) -> usize {
+        self.lightmaps.len() + self.sh.len() + self.vertex.len()
+    }
+}
+
+/// A GPU technique's renderer and the per-frame work around it.
+pub struct TechniqueRenderer {
+    pub technique: Technique,
+    pub renderer: Renderer,
+    /// SH techniques: the projector of the scene's lights and the scene it projects.
+    sh_light: Option<(ShProjector, Scene)>,
+    debug_view: DebugView,
+    ssaa: u32,
+}
+
+/// Build the renderer of a GPU technique.
+pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<TechniqueRenderer> {
+    req.technique.check_options(req.args, false)?;
+    let mut sh_light = None;
+    let renderer = match req.technique.family() {
+        Family::PathTraced => bail!("'{}' is not a GPU technique", req.technique),
+        Family::Phong => {
+            let a = &req.args.raster;
+            let shadows = req.technique.shadows(a.shadow_variant)?;
+            let s = a.settings(shadows, req.width, req.height, req.camera)?;
+            Renderer::new(ctx, req.scene, s)?
+        }
+        Family::Lightmap => {
+            let lm = lightmap::lightmaps(req, bakes)?;
+            lightmap::renderer(ctx, req, lm)?
+        }
+        Family::Sh => {
+            let data = sh::data(req, bakes)?;
+            let (r, projector) = sh::renderer(ctx, req, &data)?;
+            sh_light = Some((projector, data.scene().clone()));
+            r
+        }
+        Family::Lpv => lpv::renderer(ctx, req)?,
+    };
+    Ok(TechniqueRenderer {
+        technique: req.technique,
+        renderer,
+        sh_light,
+        debug_view: req.args.lpv.debug_view,
+        ssaa: req.args.raster.ssaa,
+    })
+}
+
+impl TechniqueRenderer {
+    /// The CPU work of a frame before it is drawn: SH techniques re-project the scene's lights.
+    /// Returns its time in milliseconds, None for techniques without such work.
+    pub fn update(&mut self, ctx: &GpuContext) -> Result<Option<f64>> {
+        let Some((projector, scene)) = &self.sh_light else {
+            return Ok(None);
+        };
+        let t0 = Instant::now();
+        let light = projector.project(scene, None);
+        sh::set_light(ctx, &mut self.renderer, &light)?;
+        Ok(Some(t0.elapsed().as_secs_f64() * 1e3))
+    }
+
+    /// Render two frames (the first compiles pipelines and uploads) and return the second's
+    /// image, downsampled by the supersampling factor (or the `--debug-view` layer), and its
+    /// times.
+    pub fn image(&mut self, ctx: &GpuContext) -> Result<(Image, FrameTimes)> {
+        let r = &mut self.renderer;
+        r.render(ctx);
+        let times = r.render(ctx);
+        let img = r.read_hdr(ctx)?.downsample(self.ssaa);
+        if self.technique.family() == Family::Lpv
+            && let Some(layer) = lpv::debug_image(ctx, r, self.debug_view, self.ssaa)?
+        {
+            return Ok((layer, times));
+        }
+        Ok((img, times))
+    }
+}

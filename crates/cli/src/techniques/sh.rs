@@ -1,0 +1,201 @@
+//! The SH techniques: `prt-vertex` and `prt-textured` (McKenzie Chapter ch. 4), `shl`,
+//! `shl-compressed` and `shl-normalmapped` (Fuchs §5): transfer read from `--baked` or baked
+//! now, the scene's lights projected on SH (re-projected every frame by the caller), and the
+//! GPU renderer whose ambient term is transfer · light.
+
+use super::{Bakes, Request};
+use crate::technique::Technique;
+use anyhow::{Result, bail};
+use lightlab_bake::prt::{ShLightmaps, VertexTransfer, bake_sh_lightmaps, vertex_transfer};
+use lightlab_bake::sh_compress::{CompressSettings, CompressedSh, compress};
+use lightlab_bake::sh_light::{SamplePoints, ShLighting, ShProjector};
+use lightlab_gpu::GpuContext;
+use lightlab_gpu::prt::{IndexPage, ShFilter, ShInput, ShTransfer};
+use lightlab_gpu::raster::{Ambient, Renderer};
+use lightlab_scene::Scene;
+
+/// Transfer data of an SH technique.
+pub enum ShData<'a> {
+    Textured(&'a ShLightmaps),
+    Compressed(&'a ShLightmaps, CompressedSh),
+    Vertex(&'a Scene, &'a VertexTransfer),
+}
+
+impl ShData<'_> {
+    pub fn bands(&self) -> usize {
+        match self {
+            ShData::Textured(sl) | ShData::Compressed(sl, _) => sl.bands,
+            ShData::Vertex(_, vt) => vt.bands,
+        }
+    }
+    pub fn scene(&self) -> &Scene {
+        match self {
+            ShData::Textured(sl) | ShData::Compressed(sl, _) => &sl.scene,
+            ShData::Vertex(s, _) => s,
+        }
+    }
+}
+
+/// SH light-maps and the compressed copy their folder holds.
+pub type StoredSh = (ShLightmaps, Option<CompressedSh>);
+
+/// The transfer of the request: from `--baked`, or computed now; once per folder or settings
+/// in `bakes` (one SH light-map bake serves `shl`, `prt-textured` and `shl-compressed`).
+pub fn data<'b>(req: &Request<'b>, bakes: &'b mut Bakes) -> Result<ShData<'b>> {
+    let mut s = req.args.bake.transfer_settings()?;
+    // Fuchs §5.7: only the bake changes; the renderer is shl's.
+    s.normal_mapped |= req.technique == Technique::ShlNormalmapped;
+    let scene = req.scene;
+    if req.technique == Technique::PrtVertex {
+        let key = match &req.args.baked {
+            Some(dir) => format!("dir {}", dir.display()),
+            None => serde_json::to_string(&s)?,
+        };
+        if !bakes.vertex.contains_key(&key) {
+            let vt = match &req.args.baked {
+                Some(dir) => lightlab_bake::sh_folder::read_vertex_transfer(dir, scene)?.0,
+                None => {
+                    eprintln!(
+                        "computing {} per-vertex transfer ({} bands, {:?}, {} directions)",
+                        scene.name, s.bands, s.kind, s.samples
+                    );
+                    let accel = lightlab_trace::Accel::new(scene);
+                    vertex_transfer(scene, &accel, &s)?.0
+                }
+            };
+            bakes.vertex.insert(key.clone(), vt);
+        }
+        return Ok(ShData::Vertex(scene, &bakes.vertex[&key]));
+    }
+    let tpm = req.args.bake.texels_per_metre;
+    let key = match &req.args.baked {
+        Some(dir) => format!("dir {}", dir.display()),
+        None => format!("{} {tpm}", serde_json::to_string(&s)?),
+    };
+    if !bakes.sh.contains_key(&key) {
+        let stored = match &req.args.baked {
+            Some(dir) => lightlab_bake::sh_folder::read_sh_with_compressed(dir, scene)?,
+            None => {
+                eprintln!(
+                    "no --baked folder: baking {} SH light-maps now ({} bands, {:?}, {} \
+                     directions, {tpm} texels/m)",
+                    scene.name, s.bands, s.kind, s.samples
+                );
+                let layout = lightlab_bake::layout::LayoutSettings {
+                    texels_per_metre: tpm,
+                    ..Default::default()
+                };
+                let sl = bake_sh_lightmaps(scene, &layout, &s, &lightlab_bake::no_progress)?;
+                (sl, None)
+            }
+        };
+        bakes.sh.insert(key.clone(), stored);
+    }
+    let (sl, stored) = &bakes.sh[&key];
+    if let Some(dir) = &req.args.baked
+        && s.normal_mapped
+        && !sl.settings.normal_mapped
+    {
+        bail!(
+            "{} was baked without normal maps; bake it with `lightlab bake --method sh \
+             --normal-mapped` for {}",
+            dir.display(),
+            req.technique
+        );
+    }
+    if req.technique != Technique::ShlCompressed {
+        return Ok(ShData::Textured(sl));
+    }
+    if let Some(c) = stored {
+        eprintln!(
+            "using the folder's compressed copy ({} representatives, {:.1}× smaller)",
+            c.stats.representatives, c.stats.ratio
+        );
+        return Ok(ShData::Compressed(sl, c.clone()));
+    }
+    let c = compress(
+        sl,
+        &CompressSettings {
+            representatives: req.args.sh.sh_representatives,
+            ..Default::default()
+        },
+    )?;
+    let st = &c.stats;
+    eprintln!(
+        "compressed {} transfer vectors to {} representatives in {} iterations ({:.2} s): \
+         {:.1}× smaller, rms distance {:.4}",
+        st.vectors, st.representatives, st.iterations, st.seconds, st.ratio, st.rms_distance
+    );
+    Ok(ShData::Compressed(sl, c))
+}
+
+/// Upload this frame's SH light.
+pub fn set_light(ctx: &GpuContext, r: &mut Renderer, light: &ShLighting) -> Result<()> {
+    let (points, coeffs) = light.flattened();
+    r.set_sh_light(ctx, &points, &coeffs)?;
+    Ok(())
+}
+
+/// The GPU renderer of an SH technique lit by the scene's lights of now, and the projector
+/// that re-projects them each frame.
+pub fn renderer(ctx: &GpuContext, req: &Request, data: &ShData) -> Result<(Renderer, ShProjector)> {
+    let bands = data.bands();
+    let prt = matches!(req.technique, Technique::PrtVertex | Technique::PrtTextured);
+    let ls = req.args.sh.light_settings(prt, bands)?;
+    let a = &req.args.raster;
+    let mut s = a.settings(
+        req.technique.shadows(a.shadow_variant)?,
+        req.width,
+        req.height,
+        req.camera,
+    )?;
+    s.ambient = Ambient::None;
+    // The lights reach the surfaces through the transfer only.
+    let mut scene = data.scene().clone();
+    let projector = ShProjector::new(&scene, &ls);
+    let light = projector.project(&scene, None);
+    scene.lights.clear();
+    let filter = req.args.sh.sh_filter.unwrap_or(ShFilter::Bilinear);
+    let index_pages: Vec<IndexPage>;
+    let (transfer, rects) = match data {
+        ShData::Textured(sl) => (
+            ShTransfer::Textured { pages: &sl.pages },
+            super::lightmap::layout_rects(&sl.layout),
+        ),
+        ShData::Compressed(sl, c) => {
+            index_pages = c
+                .pages
+                .iter()
+                .map(|p| IndexPage {
+                    width: p.width,
+                    height: p.height,
+                    indices: &p.indices,
+                })
+                .collect();
+            (
+                ShTransfer::Compressed {
+                    pages: &index_pages,
+                    representatives: &c.representatives,
+                    filter,
+                },
+                super::lightmap::layout_rects(&sl.layout),
+            )
+        }
+        ShData::Vertex(_, vt) => (
+            ShTransfer::Vertex {
+                instances: &vt.instances,
+            },
+            vec![],
+        ),
+    };
+    let input = ShInput {
+        bands,
+        transfer,
+        rects: &rects,
+        per_object: ls.points == SamplePoints::PerObject,
+        points: light.points[0].len(),
+    };
+    let mut r = Renderer::with_sh(ctx, &scene, s, &input)?;
+    set_light(ctx, &mut r, &light)?;
+    Ok((r, projector))
+}

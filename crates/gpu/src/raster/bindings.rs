@@ -1,0 +1,181 @@
+//! The renderer's bind-group layouts, named by role, and typed helpers for their entries.
+//!
+//! Groups: `frame` (0: frame uniforms, lights, shadow views, the per-pass slot), the
+//! material (1, `gpu_scene`), `lighting` (2: shadow maps and the ambient sources' resources),
+//! and the full-screen inputs (3: G-buffer, tonemap source, sky).
+
+use wgpu::{BindGroupLayoutEntry as Entry, BindingType, ShaderStages, TextureViewDimension as Dim};
+
+/// A uniform or storage buffer, seen by the vertex and fragment stages.
+pub fn buffer(binding: u32, ty: wgpu::BufferBindingType, dynamic: bool) -> Entry {
+    Entry {
+        binding,
+        visibility: ShaderStages::VERTEX_FRAGMENT,
+        ty: BindingType::Buffer {
+            ty,
+            has_dynamic_offset: dynamic,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A read-only storage buffer.
+pub fn storage(binding: u32) -> Entry {
+    buffer(
+        binding,
+        wgpu::BufferBindingType::Storage { read_only: true },
+        false,
+    )
+}
+
+/// A texture read by the fragment stage.
+pub fn texture(binding: u32, sample_type: wgpu::TextureSampleType, dim: Dim) -> Entry {
+    Entry {
+        binding,
+        visibility: ShaderStages::FRAGMENT,
+        ty: BindingType::Texture {
+            sample_type,
+            view_dimension: dim,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// A texture read texel by texel (unfilterable float).
+pub fn texel_texture(binding: u32, dim: Dim) -> Entry {
+    texture(
+        binding,
+        wgpu::TextureSampleType::Float { filterable: false },
+        dim,
+    )
+}
+
+/// A filterable float texture.
+pub fn filtered_texture(binding: u32, dim: Dim) -> Entry {
+    texture(
+        binding,
+        wgpu::TextureSampleType::Float { filterable: true },
+        dim,
+    )
+}
+
+/// A sampler of the fragment stage.
+pub fn sampler(binding: u32, ty: wgpu::SamplerBindingType) -> Entry {
+    Entry {
+        binding,
+        visibility: ShaderStages::FRAGMENT,
+        ty: BindingType::Sampler(ty),
+        count: None,
+    }
+}
+
+fn layout(device: &wgpu::Device, label: &str, entries: &[Entry]) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries,
+    })
+}
+
+/// The bind-group layouts of the renderer, by role.
+pub(super) struct GroupLayouts {
+    pub frame: wgpu::BindGroupLayout,
+    pub material: wgpu::BindGroupLayout,
+    pub lighting: wgpu::BindGroupLayout,
+    pub gbuffer: wgpu::BindGroupLayout,
+    pub tonemap: wgpu::BindGroupLayout,
+    pub sky: wgpu::BindGroupLayout,
+}
+
+impl GroupLayouts {
+    pub fn new(device: &wgpu::Device) -> GroupLayouts {
+        use wgpu::SamplerBindingType as S;
+        let frame = layout(
+            device,
+            "frame",
+            &[
+                buffer(0, wgpu::BufferBindingType::Uniform, false),
+                storage(1),
+                storage(2),
+                buffer(3, wgpu::BufferBindingType::Uniform, true),
+            ],
+        );
+        // Shadow maps (0–2), light-maps or textured SH (3, 4), SH transfer and light (5–8),
+        // the light propagation volume (9–12).
+        let lighting = layout(
+            device,
+            "lighting",
+            &[
+                texture(0, wgpu::TextureSampleType::Depth, Dim::D2Array),
+                sampler(1, S::Comparison),
+                texel_texture(2, Dim::D2Array),
+                filtered_texture(3, Dim::D2Array),
+                sampler(4, S::Filtering),
+                storage(5),
+                storage(6),
+                texture(7, wgpu::TextureSampleType::Uint, Dim::D2Array),
+                storage(8),
+                filtered_texture(9, Dim::D3),
+                filtered_texture(10, Dim::D3),
+                filtered_texture(11, Dim::D3),
+                sampler(12, S::Filtering),
+            ],
+        );
+        let gbuffer = layout(
+            device,
+            "g-buffer",
+            &(0..4)
+                .map(|b| texel_texture(b, Dim::D2))
+                .collect::<Vec<_>>(),
+        );
+        GroupLayouts {
+            frame,
+            material: crate::gpu_scene::material_layout(device),
+            lighting,
+            gbuffer,
+            tonemap: layout(device, "tonemap", &[texel_texture(4, Dim::D2)]),
+            sky: layout(device, "sky", &[texel_texture(5, Dim::D2)]),
+        }
+    }
+}
+
+/// The pipeline layouts: which groups each kind of pass binds.
+pub(super) struct PipelineLayouts {
+    /// Scene passes: frame, material, lighting.
+    pub scene: wgpu::PipelineLayout,
+    /// Deferred lighting and the shadow-map mask: … and the G-buffer.
+    pub deferred: wgpu::PipelineLayout,
+    /// Shadow maps and planar projections: frame, material.
+    pub shadow: wgpu::PipelineLayout,
+    /// Shadow volumes and the stencil mask: frame only.
+    pub frame: wgpu::PipelineLayout,
+    pub tonemap: wgpu::PipelineLayout,
+    pub sky: wgpu::PipelineLayout,
+}
+
+impl PipelineLayouts {
+    pub fn new(device: &wgpu::Device, g: &GroupLayouts) -> PipelineLayouts {
+        let pl = |label, groups: &[&wgpu::BindGroupLayout]| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &groups.iter().map(|g| Some(*g)).collect::<Vec<_>>(),
+                immediate_size: 0,
+            })
+        };
+        let (f, m, l) = (&g.frame, &g.material, &g.lighting);
+        PipelineLayouts {
+            scene: pl("scene", &[f, m, l]),
+            deferred: pl("deferred", &[f, m, l, &g.gbuffer]),
+            shadow: pl("shadow", &[f, m]),
+            frame: pl("frame only", &[f]),
+            tonemap: pl("tonemap", &[f, m, l, &g.tonemap]),
+            sky: pl("sky", &[f, m, l, &g.sky]),
+        }
+    }
+}
+
+/// A bind-group entry.
+pub fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource }
+}

@@ -1,0 +1,451 @@
+//! Building a [`Renderer`]: checked settings, the camera, the light-map page layout, the
+//! lights and their shadow views, uniforms, pipelines, targets and bind groups.
+
+use super::ambient::{LightmapInput, ShResources, lpv_views, page_layout, sh_irradiance};
+use super::bindings::{GroupLayouts, PipelineLayouts, entry};
+use super::light_set::LightSet;
+use super::pipelines::Pipelines;
+use super::settings::{RasterError, RasterSettings, ShadowMethod, projection};
+use super::targets::{
+    ShadowArrays, ShadowMaps, Targets, env_texture, gbuffer_formats, renderable_or,
+};
+use super::{Renderer, SHADER_SOURCE, SLOT};
+use crate::GpuContext;
+use crate::gpu_scene::GpuScene;
+use crate::lpv::{Lpv, LpvScheme, LpvSettings};
+use crate::prt::{ShInput, ShTransfer};
+use crate::uniforms::{FrameUniforms, PassUniforms, ShadowView};
+use bytemuck::Zeroable;
+use glam::Mat4;
+use lightlab_scene::{Camera, Scene};
+use wgpu::BindingResource as R;
+use wgpu::util::DeviceExt;
+
+/// What the ambient term reads besides the environment's SH irradiance (at most one).
+#[derive(Clone, Copy)]
+pub(super) enum AmbientInput<'a> {
+    None,
+    Lightmap(&'a LightmapInput<'a>),
+    Sh(&'a ShInput<'a>),
+    /// The volume's settings, and whether to render its indirect light alone.
+    Lpv(&'a LpvSettings, bool),
+}
+
+impl<'a> AmbientInput<'a> {
+    fn lightmap(self) -> Option<&'a LightmapInput<'a>> {
+        match self {
+            AmbientInput::Lightmap(l) => Some(l),
+            _ => None,
+        }
+    }
+    fn sh(self) -> Option<&'a ShInput<'a>> {
+        match self {
+            AmbientInput::Sh(s) => Some(s),
+            _ => None,
+        }
+    }
+}
+
+/// The frame's buffers: uniforms, lights, shadow views (then planar projections) and the
+/// per-pass slots (light i → slot i; shadow view v → lights + v).
+struct FrameBuffers {
+    frame: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    views: wgpu::Buffer,
+    passes: wgpu::Buffer,
+}
+
+impl FrameBuffers {
+    fn new(device: &wgpu::Device, frame: &FrameUniforms, ls: &LightSet) -> FrameBuffers {
+        let init = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let mut all_views: Vec<ShadowView> = if ls.views.is_empty() {
+            vec![ShadowView::zeroed()]
+        } else {
+            ls.views.iter().map(|v| v.gpu()).collect()
+        };
+        let planar_base = all_views.len();
+        for p in &ls.planar {
+            all_views.push(ShadowView {
+                view_proj: p.unwrap_or(Mat4::ZERO).to_cols_array_2d(),
+                ..ShadowView::zeroed()
+            });
+        }
+        let n = ls.lights.len();
+        let mut slots = vec![0u8; (n + ls.views.len()).max(1) * SLOT as usize];
+        let mut put = |slot: usize, light: usize, view: usize| {
+            let p = PassUniforms {
+                light_index: light as u32,
+                shadow_view: view as u32,
+                ..Default::default()
+            };
+            slots[slot * SLOT as usize..][..16].copy_from_slice(bytemuck::bytes_of(&p));
+        };
+        for i in 0..n {
+            put(i, i, planar_base + i);
+        }
+        for (v, &li) in ls.view_light.iter().enumerate() {
+            put(n + v, li, v);
+        }
+        let storage = wgpu::BufferUsages::STORAGE;
+        FrameBuffers {
+            frame: init(
+                "frame",
+                bytemuck::bytes_of(frame),
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            ),
+            lights: init("lights", bytemuck::cast_slice(&ls.lights), storage),
+            views: init("shadow views", bytemuck::cast_slice(&all_views), storage),
+            passes: init("pass slots", &slots, wgpu::BufferUsages::UNIFORM),
+        }
+    }
+}
+
+/// The frame uniforms: camera, shadow settings, the ambient term and its source's parameters.
+fn frame_uniforms(
+    scene: &Scene,
+    s: &RasterSettings,
+    camera: &Camera,
+    lights: usize,
+    ambient: AmbientInput,
+    lpv: Option<&Lpv>,
+    page_size: [u32; 2],
+) -> FrameUniforms {
+    let aspect = s.width as f32 / s.height as f32;
+    let view = camera.transform.inverse();
+    let view_proj = projection(camera, aspect) * view;
+    let mut f = FrameUniforms {
+        view_proj: view_proj.to_cols_array_2d(),
+        inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+        view: view.to_cols_array_2d(),
+        camera_pos: camera.position().to_array(),
+        exposure: s.exposure,
+        wind_a: s.wind.uniform()[0],
+        wind_b: s.wind.uniform()[1],
+        viewport: [s.width as f32, s.height as f32],
+        light_count: lights as u32,
+        shadow_mode: match s.shadows {
+            ShadowMethod::Map => 1,
+            ShadowMethod::MapLinear => 2,
+            _ => 0,
+        },
+        ambient_sh: sh_irradiance(scene, s.ambient),
+        pcf_radius: s.pcf_radius,
+        normal_offset: s.normal_offset,
+        linear_bias: s.linear_bias,
+        shadow_size: s.shadow_size as f32,
+        lightmap_size: [page_size[0] as f32, page_size[1] as f32],
+        lpv_size: 1.0,
+        lpv_cascades: 1,
+        lpv_grids: [[0.0, 0.0, 0.0, 1.0]; 4],
+        ..FrameUniforms::zeroed()
+    };
+    match ambient {
+        AmbientInput::Lightmap(lm) => {
+            f.lightmap_mode =
+                if lm.bicubic { 2 } else { 1 } | if lm.directional.is_some() { 4 } else { 0 };
+            f.lightmap_pages = lm.pages.len() as u32;
+        }
+        AmbientInput::Sh(sh) => {
+            let groups = sh.groups(scene.instances.len());
+            f.sh_mode = sh.mode();
+            f.sh_layers = crate::prt::layers(sh.bands) as u32;
+            f.sh_points = sh.points as u32;
+            f.sh_per_object = sh.per_object as u32;
+            if let ShTransfer::Compressed { filter, .. } = &sh.transfer {
+                f.sh_filter = filter.code();
+            }
+            f.sh_reps = sh.representatives() as u32;
+            f.sh_coeff_base = (groups * sh.points) as u32;
+            f.sh_groups = groups as u32;
+        }
+        AmbientInput::Lpv(_, indirect_only) => f.lpv_indirect_only = indirect_only as u32,
+        AmbientInput::None => {}
+    }
+    if let Some(l) = lpv {
+        f.lpv_mode = match l.settings.scheme {
+            LpvScheme::Kaplanyan => 1,
+            LpvScheme::Wpi => 2,
+        };
+        f.lpv_size = l.grids[0].n as f32;
+        f.lpv_cascades = l.grids.len() as u32;
+        for (k, grid) in l.grids.iter().enumerate() {
+            f.lpv_grids[k] = grid.origin.extend(grid.cell).to_array();
+        }
+        f.lpv_damping = match l.settings.scheme {
+            LpvScheme::Kaplanyan => l.settings.damping,
+            LpvScheme::Wpi => 0.0,
+        };
+    }
+    f
+}
+
+/// The bind groups of the lighting passes and of the full-screen passes.
+struct Groups {
+    frame: wgpu::BindGroup,
+    lighting: wgpu::BindGroup,
+    gbuffer: wgpu::BindGroup,
+    tonemap: wgpu::BindGroup,
+}
+
+/// Group 2: the shadow maps and the ambient sources' resources.
+fn lighting_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    shadow: &ShadowArrays,
+    ambient: AmbientInput,
+    sh: &ShResources,
+    lpv: Option<&Lpv>,
+    page_size: [u32; 2],
+) -> wgpu::BindGroup {
+    let device = &ctx.device;
+    let cmp = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("shadow compare"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        compare: Some(wgpu::CompareFunction::LessEqual),
+        ..Default::default()
+    });
+    let (lm_view, lm_sampler) =
+        super::ambient::upload_lightmaps(ctx, ambient.lightmap(), ambient.sh(), page_size);
+    let lpv_views = lpv_views(ctx, lpv);
+    let lpv_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("lpv"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("lighting"),
+        layout,
+        entries: &[
+            entry(0, R::TextureView(&shadow.depth)),
+            entry(1, R::Sampler(&cmp)),
+            entry(2, R::TextureView(&shadow.linear)),
+            entry(3, R::TextureView(&lm_view)),
+            entry(4, R::Sampler(&lm_sampler)),
+            entry(5, sh.vertex.as_entire_binding()),
+            entry(6, sh.light.as_entire_binding()),
+            entry(7, R::TextureView(&sh.index)),
+            entry(8, sh.relit.as_entire_binding()),
+            entry(9, R::TextureView(&lpv_views[0])),
+            entry(10, R::TextureView(&lpv_views[1])),
+            entry(11, R::TextureView(&lpv_views[2])),
+            entry(12, R::Sampler(&lpv_sampler)),
+        ],
+    })
+}
+
+fn groups(
+    device: &wgpu::Device,
+    layouts: &GroupLayouts,
+    buffers: &FrameBuffers,
+    targets: &Targets,
+    lighting: wgpu::BindGroup,
+) -> Groups {
+    let group = |label, layout, entries: &[wgpu::BindGroupEntry]| {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout,
+            entries,
+        })
+    };
+    let pass_slot = R::Buffer(wgpu::BufferBinding {
+        buffer: &buffers.passes,
+        offset: 0,
+        size: wgpu::BufferSize::new(16),
+    });
+    let g = &targets.gbuffer;
+    Groups {
+        frame: group(
+            "frame",
+            &layouts.frame,
+            &[
+                entry(0, buffers.frame.as_entire_binding()),
+                entry(1, buffers.lights.as_entire_binding()),
+                entry(2, buffers.views.as_entire_binding()),
+                entry(3, pass_slot),
+            ],
+        ),
+        lighting,
+        gbuffer: group(
+            "g-buffer",
+            &layouts.gbuffer,
+            &[
+                entry(0, R::TextureView(&g[0])),
+                entry(1, R::TextureView(&g[1])),
+                entry(2, R::TextureView(&g[2])),
+                entry(3, R::TextureView(&g[3])),
+            ],
+        ),
+        tonemap: group(
+            "tonemap",
+            &layouts.tonemap,
+            &[entry(4, R::TextureView(&targets.hdr_view))],
+        ),
+    }
+}
+
+/// Timestamp queries for every pass of a frame: the set, its resolve and read buffers.
+fn queries(
+    ctx: &GpuContext,
+    passes: usize,
+) -> Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)> {
+    let device = &ctx.device;
+    ctx.has_timestamps().then(|| {
+        let count = 2 * passes as u32;
+        let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("timestamps"),
+            ty: wgpu::QueryType::Timestamp,
+            count,
+        });
+        let buffer = |label, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: count as u64 * 8,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let resolve = buffer(
+            "timestamp resolve",
+            wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let read = buffer(
+            "timestamp read",
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        );
+        (set, resolve, read)
+    })
+}
+
+impl Renderer {
+    pub(super) fn build(
+        ctx: &GpuContext,
+        scene: &Scene,
+        settings: RasterSettings,
+        ambient: AmbientInput,
+    ) -> Result<Renderer, RasterError> {
+        let s = &settings;
+        if let AmbientInput::Lightmap(lm) = ambient
+            && !super::ambient::lightmap_fits(lm, scene)
+        {
+            return Err(RasterError::Settings(
+                "light-maps do not match the scene (one rect per instance, non-empty pages)".into(),
+            ));
+        }
+        if let AmbientInput::Sh(sh) = ambient {
+            sh.validate(scene)?;
+        }
+        s.validate()?;
+        let camera = scene
+            .cameras
+            .get(s.camera)
+            .cloned()
+            .or_else(|| (s.camera == 0).then(|| scene.framing_camera()).flatten())
+            .ok_or(RasterError::NoCamera(s.camera))?;
+        let device = &ctx.device;
+        let (page_size, rects) = page_layout(ambient.lightmap(), ambient.sh());
+        let gscene = GpuScene::with_lightmap_uvs(device, &ctx.queue, scene, rects.as_deref());
+        let lpv = match ambient {
+            AmbientInput::Lpv(l, _) => {
+                let aspect = s.width as f32 / s.height as f32;
+                let v = Lpv::new(ctx, scene, l.clone(), &camera, aspect, &s.wind)?;
+                Some(v)
+            }
+            _ => None,
+        };
+        // A light-map holds the emitters' light already; SH transfer is lit by its SH light only.
+        let area_lights =
+            s.area_lights && matches!(ambient, AmbientInput::None | AmbientInput::Lpv(..));
+        let ls = LightSet::new(scene, s, &camera, gscene.bounds, area_lights);
+        let frame = frame_uniforms(
+            scene,
+            s,
+            &camera,
+            ls.light_pos.len(),
+            ambient,
+            lpv.as_ref(),
+            page_size,
+        );
+        let buffers = FrameBuffers::new(device, &frame, &ls);
+        let layouts = GroupLayouts::new(device);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raster"),
+            source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.as_str().into()),
+        });
+        let linear_format = renderable_or(
+            ctx,
+            wgpu::TextureFormat::R32Float,
+            wgpu::TextureFormat::R16Float,
+        );
+        let pipelines = Pipelines::new(
+            device,
+            &module,
+            s,
+            &PipelineLayouts::new(device, &layouts),
+            gbuffer_formats(ctx),
+            linear_format,
+        );
+        let targets = Targets::new(ctx, s);
+        let (shadow, arrays) = ShadowMaps::new(ctx, s, ls.views.len(), linear_format);
+        let sh = ShResources::new(ctx, ambient.sh(), &frame, page_size, &buffers.frame);
+        let lighting = lighting_group(
+            ctx,
+            &layouts.lighting,
+            &arrays,
+            ambient,
+            &sh,
+            lpv.as_ref(),
+            page_size,
+        );
+        let g = groups(device, &layouts, &buffers, &targets, lighting);
+        let sky_group = scene
+            .environment
+            .as_ref()
+            .filter(|_| s.background)
+            .map(|env| {
+                let view = env_texture(ctx, env);
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("sky"),
+                    layout: &layouts.sky,
+                    entries: &[entry(5, R::TextureView(&view))],
+                })
+            });
+        let lpv_passes = lpv.as_ref().map_or(0, |l| 2 * l.light_count() + 1);
+        let queries = queries(ctx, 5 + 2 * ls.lights.len() + ls.views.len() + lpv_passes);
+        Ok(Renderer {
+            settings,
+            scene: gscene,
+            camera,
+            lights: ls.lights,
+            light_pos: ls.light_pos,
+            light_radius: ls.light_radius,
+            views: ls.views,
+            view_light: ls.view_light,
+            planar: ls.planar,
+            plane: ls.plane,
+            pipelines,
+            targets,
+            shadow,
+            frame_buf: buffers.frame,
+            _pass_buf: buffers.passes,
+            group0: g.frame,
+            group2: g.lighting,
+            group3: g.gbuffer,
+            tonemap_group: g.tonemap,
+            sky_group,
+            volume_buf: None,
+            volume_ranges: vec![],
+            queries,
+            frame,
+            sh,
+            lpv,
+        })
+    }
+}

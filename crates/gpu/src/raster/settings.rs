@@ -1,0 +1,240 @@
+//! What a renderer is asked to draw ([`RasterSettings`], with its render path, shadow method
+//! and ambient term), its errors and its timings.
+
+use crate::GpuError;
+use crate::lights::Attenuation;
+use glam::camera::rh::proj::directx;
+use glam::{Mat4, Vec3, Vec4};
+use lightlab_scene::Camera;
+use std::collections::BTreeMap;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RenderPath {
+    Forward,
+    Deferred,
+}
+
+lightlab_core::named_enum!(RenderPath, "render path", {
+    Forward => "forward",
+    Deferred => "deferred",
+});
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowMethod {
+    None,
+    /// Stencil shadow volumes, z-fail (Carmack's reverse) with capped volumes.
+    VolumesZFail,
+    /// Stencil shadow volumes, z-pass (wrong when the camera is inside a volume).
+    VolumesZPass,
+    /// Shadow maps with hardware depth comparison.
+    Map,
+    /// Shadow maps with Heidrich's (1999, ch. 6) linear-depth comparison.
+    MapLinear,
+    /// Projected planar shadows on one receiver plane (Heidrich 1999 §6.1).
+    Planar,
+}
+
+impl ShadowMethod {
+    pub(super) fn stencil(self) -> bool {
+        matches!(
+            self,
+            ShadowMethod::VolumesZFail | ShadowMethod::VolumesZPass | ShadowMethod::Planar
+        )
+    }
+    pub(super) fn map(self) -> bool {
+        matches!(self, ShadowMethod::Map | ShadowMethod::MapLinear)
+    }
+}
+
+/// The constant or environment light of the ambient term (Fuchs's ambient uses the light-map;
+/// until light-maps exist it is this irradiance).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Ambient {
+    None,
+    /// A uniform sky of this radiance (unshadowed).
+    Constant(Vec3),
+    /// The scene's environment map, projected on 9 SH coefficients (unshadowed).
+    Environment,
+}
+
+/// An `--ambient` that is neither `env`, `none` nor three non-negative numbers `r,g,b`.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("the ambient term must be env, none or r,g,b (non-negative), not '{0}'")]
+pub struct BadAmbient(pub String);
+
+impl std::str::FromStr for Ambient {
+    type Err = BadAmbient;
+    /// `env`, `none`, or a constant sky radiance `r,g,b`.
+    fn from_str(s: &str) -> Result<Ambient, BadAmbient> {
+        match s {
+            "env" => return Ok(Ambient::Environment),
+            "none" => return Ok(Ambient::None),
+            _ => {}
+        }
+        let v: Vec<f32> = s
+            .split(',')
+            .map(|x| x.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| BadAmbient(s.into()))?;
+        match v[..] {
+            [r, g, b] if v.iter().all(|x| x.is_finite() && *x >= 0.0) => {
+                Ok(Ambient::Constant(Vec3::new(r, g, b)))
+            }
+            _ => Err(BadAmbient(s.into())),
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct RasterSettings {
+    pub width: u32,
+    pub height: u32,
+    pub camera: usize,
+    pub path: RenderPath,
+    pub shadows: ShadowMethod,
+    pub attenuation: Attenuation,
+    /// Override of the light radius r of the Fuchs attenuation functions.
+    pub light_radius: Option<f32>,
+    pub ambient: Ambient,
+    pub shadow_size: u32,
+    pub pcf_radius: i32,
+    /// Normal offset in texels.
+    pub normal_offset: f32,
+    /// Slope-scaled depth bias of the shadow-map pass.
+    pub slope_bias: f32,
+    /// Constant depth bias (depth-buffer units) of the shadow-map pass.
+    pub constant_bias: i32,
+    /// Bias on the normalised linear depth (Heidrich's variant).
+    pub linear_bias: f32,
+    pub cascades: usize,
+    /// Receiver plane (n, d) with n·x + d = 0 of planar shadows; None = the largest up-facing
+    /// plane of the scene.
+    pub planar_plane: Option<Vec4>,
+    /// Scissor each light's passes to its screen rectangle, and cull objects outside its radius.
+    pub scissor: bool,
+    pub exposure: f32,
+    /// Wind sway of foliage, the same in every pass (amplitude 0: none). Shadow volumes are
+    /// built on the CPU from the rest pose, so wind needs another shadow method.
+    pub wind: lightlab_core::wind::Wind,
+    /// Draw the scene's environment map where no surface is seen, as the path tracer does
+    /// (so that renders compare pixel by pixel); false leaves the background black.
+    pub background: bool,
+    /// Light with the scene's planar emitters as Lambertian rectangle lights (after its
+    /// punctual lights; at most [`MAX_AREA_LIGHTS`], brightest first). Renderers built
+    /// `with_lightmap` (a light-map already holds the emitters' light) or `with_sh` (lit by
+    /// their SH light alone) ignore it.
+    pub area_lights: bool,
+}
+
+impl Default for RasterSettings {
+    fn default() -> Self {
+        RasterSettings {
+            width: 256,
+            height: 256,
+            camera: 0,
+            path: RenderPath::Forward,
+            shadows: ShadowMethod::VolumesZFail,
+            attenuation: Attenuation::Fuchs4,
+            light_radius: None,
+            ambient: Ambient::Environment,
+            shadow_size: 2048,
+            pcf_radius: 1,
+            normal_offset: 1.5,
+            slope_bias: 1.5,
+            constant_bias: 2,
+            linear_bias: 0.002,
+            cascades: 4,
+            planar_plane: None,
+            scissor: true,
+            exposure: 1.0,
+            wind: Default::default(),
+            background: true,
+            area_lights: true,
+        }
+    }
+}
+
+impl RasterSettings {
+    /// Refuse sizes and counts the renderer does not support, and wind it cannot sway with.
+    pub fn validate(&self) -> Result<(), RasterError> {
+        let s = self;
+        check_wind(&s.wind, s.shadows)?;
+        if s.width == 0 || s.height == 0 || s.width > 16384 || s.height > 16384 {
+            return Err(RasterError::Settings(format!(
+                "image size {}×{} must be within 1..=16384",
+                s.width, s.height
+            )));
+        }
+        if !(64..=8192).contains(&s.shadow_size) {
+            return Err(RasterError::Settings(format!(
+                "shadow map size {} must be within 64..=8192",
+                s.shadow_size
+            )));
+        }
+        if !(1..=4).contains(&s.cascades) {
+            return Err(RasterError::Settings("cascades must be 1 to 4".into()));
+        }
+        if !(0..=4).contains(&s.pcf_radius) {
+            return Err(RasterError::Settings("PCF radius must be 0 to 4".into()));
+        }
+        Ok(())
+    }
+}
+
+/// At most this many emitters become area lights (each costs a light's passes and shadows).
+pub const MAX_AREA_LIGHTS: usize = 8;
+
+/// Errors of the renderer.
+#[derive(Debug, thiserror::Error)]
+pub enum RasterError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error("the scene has no camera {0}")]
+    NoCamera(usize),
+    #[error("invalid settings: {0}")]
+    Settings(String),
+    #[error(transparent)]
+    Wind(#[from] lightlab_core::wind::WindError),
+    #[error(transparent)]
+    Sh(#[from] crate::prt::ShInputError),
+    #[error(transparent)]
+    Lpv(#[from] crate::lpv::LpvError),
+    #[error(transparent)]
+    Readback(#[from] crate::resources::ReadbackError),
+}
+
+/// GPU and CPU times of one frame, by pass category (milliseconds).
+#[derive(Clone, Debug, Default)]
+pub struct FrameTimes {
+    /// Sum of GPU timestamp intervals per category; empty without timestamp support.
+    pub gpu_ms: BTreeMap<&'static str, f64>,
+    /// CPU time building shadow volumes / planar data this frame.
+    pub cpu_volumes_ms: f64,
+    /// Wall time from recording to the GPU being idle.
+    pub wall_ms: f64,
+}
+
+/// Valid wind parameters, and a shadow method that sways with them.
+pub(super) fn check_wind(
+    wind: &lightlab_core::wind::Wind,
+    shadows: ShadowMethod,
+) -> Result<(), RasterError> {
+    wind.validate()?;
+    if wind.amplitude > 0.0
+        && matches!(
+            shadows,
+            ShadowMethod::VolumesZFail | ShadowMethod::VolumesZPass
+        )
+    {
+        return Err(RasterError::Settings(
+            "wind sway needs shadow maps: shadow volumes are built on the CPU from the rest pose"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The camera projection: reversed depth with an infinite far plane.
+pub fn projection(camera: &Camera, aspect: f32) -> Mat4 {
+    directx::perspective_infinite_reverse(camera.yfov, aspect, camera.znear.max(1e-4))
+}

@@ -1,0 +1,162 @@
+//! GPU resources every technique makes the same way: textures and their views, float arrays
+//! uploaded as f16 layers, and the copy of a texture back to the CPU.
+
+use crate::GpuContext;
+
+/// A texture could not be read back (the device was lost or the mapping failed).
+#[derive(Debug, thiserror::Error)]
+#[error("GPU readback failed: {0}")]
+pub struct ReadbackError(pub String);
+
+/// A one-mip 2D texture of `layers` layers.
+pub fn texture(
+    device: &wgpu::Device,
+    label: &str,
+    w: u32,
+    h: u32,
+    layers: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+/// One layer of an array texture as a 2D view.
+pub fn layer_view(t: &wgpu::Texture, layer: u32) -> wgpu::TextureView {
+    t.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2),
+        base_array_layer: layer,
+        array_layer_count: Some(1),
+        ..Default::default()
+    })
+}
+
+/// The whole texture as a 2D array view.
+pub fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
+    t.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
+}
+
+/// An Rgba16Float array texture of `layers` layers (at least two: GL decides a texture's target
+/// at creation and makes a one-layer texture a plain 2D texture that cannot be bound as an
+/// array), each filled by `fill(layer, texels)` from zero, and a clamping linear sampler.
+pub fn upload_array(
+    ctx: &GpuContext,
+    size: [u32; 2],
+    layers: u32,
+    mut fill: impl FnMut(u32, &mut [half::f16]),
+) -> (wgpu::TextureView, wgpu::Sampler) {
+    let layers = layers.max(2);
+    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("light-maps"),
+        size: wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba16Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let mut data = vec![half::f16::ZERO; (size[0] * size[1] * 4) as usize];
+    for layer in 0..layers {
+        data.fill(half::f16::ZERO);
+        fill(layer, &mut data);
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &tex,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&data),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(size[0] * 8),
+                rows_per_image: Some(size[1]),
+            },
+            wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    let view = tex.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("light-map"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    (view, sampler)
+}
+
+/// Copy a texture (tightly packed texels of `bpp` bytes) to the CPU. The texture needs
+/// `COPY_SRC` usage.
+pub fn read_texture(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    bpp: u32,
+) -> Result<Vec<u8>, ReadbackError> {
+    let (w, h, layers) = (tex.width(), tex.height(), tex.depth_or_array_layers());
+    let row = (w * bpp).div_ceil(256) * 256;
+    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: (row * h * layers) as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        tex.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buf,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        tex.size(),
+    );
+    ctx.queue.submit([enc.finish()]);
+    let slice = buf.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| ReadbackError(e.to_string()))?;
+    let data = slice
+        .get_mapped_range()
+        .map_err(|e| ReadbackError(e.to_string()))?;
+    let mut out = Vec::with_capacity((w * h * layers * bpp) as usize);
+    for y in 0..h * layers {
+        out.extend_from_slice(&data[(y * row) as usize..][..(w * bpp) as usize]);
+    }
+    Ok(out)
+}
