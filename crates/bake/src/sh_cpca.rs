@@ -1,5 +1,5 @@
 //! Clustered principal component analysis of SH light-maps (Sloan, Hall, Hart & Snyder 2003,
-//! *Clustered Principal Components for Precomputed Radiance Transfer*): issue 6's optional
+//! *Clustered Principal Components for Precomputed Radiance Transfer*): an alternative
 //! compression beside Fuchs's vector quantisation ([`crate::sh_compress`]).
 //!
 //! Every texel's transfer vector x (bands² coefficients) is approximated in its cluster c by

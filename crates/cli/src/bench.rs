@@ -25,7 +25,9 @@ use lightlab_trace::accel::RayQuery;
 use lightlab_trace::render::surface;
 use std::time::Instant;
 
+/// The benchmarks (parsed once per run: the variants' sizes do not matter).
 #[derive(Subcommand)]
+#[allow(clippy::large_enum_variant)]
 pub enum BenchCommand {
     /// Closest-hit ray casting: coherent and incoherent rays, one thread and all.
     Trace {

@@ -264,7 +264,7 @@ fn scene_plot(rows: &[Row], scene: &str) -> String {
             Some(crate::plot::Point {
                 label: r.technique.to_string(),
                 cost_ms: r.frame.as_ref().map_or(r.seconds * 1e3, |f| f.0),
-                relmse: r.error.as_ref()?.relmse as f64,
+                relmse: r.error.as_ref()?.relmse,
                 gpu: r.frame.is_some(),
             })
         })

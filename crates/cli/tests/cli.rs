@@ -444,11 +444,11 @@ fn gpu_techniques_render_and_bench() {
         ),
         (
             vec!["--technique", "phong", "--attenuation", "cubic"],
-            "unknown --attenuation",
+            "unknown attenuation 'cubic' (known: inverse-square",
         ),
         (
             vec!["--technique", "phong", "--brdf", "velvet"],
-            "unknown --brdf",
+            "unknown BRDF model 'velvet'",
         ),
         (
             vec!["--technique", "phong", "--ambient", "1,2"],

@@ -3,7 +3,7 @@
 //! Reading: OpenEXR and Radiance HDR are taken as linear; PNG/JPEG are sRGB-decoded to linear.
 //! Writing: `.exr` stores linear f32 RGB; `.png` stores tone-mapped 8-bit sRGB. Every write goes to
 //! a temporary file in the destination folder that is renamed over the target only when complete,
-//! so a failed or interrupted write never leaves a half-written image (DESIGN.md, bad input).
+//! so a failed or interrupted write never leaves a half-written image.
 
 use crate::color::{ToneMap, srgb_decode, to_srgb8};
 use glam::Vec3;

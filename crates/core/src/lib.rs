@@ -20,7 +20,7 @@
 //! - [`param`]: sphere parameterisations (lat-long, angular, sphere map, octahedral, dual
 //!   paraboloid, cube) with per-texel solid angles.
 //!
-//! Conventions (DESIGN.md): right-handed, Y-up, metres; linear Rec.709 RGB radiometry.
+//! Conventions (docs/ARCHITECTURE.md): right-handed, Y-up, metres; linear Rec.709 RGB radiometry.
 #![forbid(unsafe_code)]
 
 pub mod brdf;

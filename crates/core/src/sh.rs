@@ -1,6 +1,6 @@
 //! Real spherical harmonics: the one module that owns lightlab's SH basis.
 //!
-//! **Convention** (DESIGN.md; Sloan's "Stupid SH Tricks", Ramamoorthi–Hanrahan 2001): real,
+//! **Convention** (docs/ARCHITECTURE.md; Sloan's "Stupid SH Tricks", Ramamoorthi–Hanrahan 2001): real,
 //! orthonormal over the unit sphere, index `i = l(l+1) + m`, functions of the direction
 //! (x, y, z) with θ measured from +z and φ = atan2(y, x), **no Condon–Shortley phase**:
 //! Y₀₀ = 0.282095; Y₁₋₁ = 0.488603·y, Y₁₀ = 0.488603·z, Y₁₁ = 0.488603·x;

@@ -1,4 +1,4 @@
-//! Wind sway of foliage (issue 7, the WPI report's §4.4 animated leaves): one displacement
+//! Wind sway of foliage (the WPI report's §4.4 animated leaves): one displacement
 //! function applied identically by every pass that rasterises the scene (camera G-buffer or
 //! forward pass, shadow maps, reflective shadow maps; WGSL `sway` in common.wgsl) and by the
 //! CPU when it builds the displaced scene the path tracer renders, so that the passes agree

@@ -130,7 +130,7 @@ mod tests {
             "struct Bad { a: vec3<f32>, b: vec3<f32> }\n@group(0) @binding(0) var<uniform> u: Bad;";
         // vec3 aligns to 16 bytes in WGSL: b sits at 16, not 12.
         let e = check_struct(wgsl, "Bad", &rust_layout!(Bad, a, b)).unwrap_err();
-        assert!(e.contains("Bad"), "{e}");
+        assert!(e.0.contains("Bad"), "{e}");
         assert!(validate_wgsl("fn broken( {").is_err());
     }
 }

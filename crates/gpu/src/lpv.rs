@@ -1,4 +1,4 @@
-//! Light propagation volumes on the GPU (issue 7): reflective shadow maps, injection,
+//! Light propagation volumes on the GPU: reflective shadow maps, injection,
 //! propagation and the 3D textures the renderer's ambient pass reads (`Renderer::with_lpv`).
 //!
 //! Per frame, [`Lpv::record`] runs, for every RSM view (directional and spot lights, the six

@@ -1,6 +1,6 @@
 //! The scene model: what a glTF file loads into and what every baker and renderer reads.
 //!
-//! Units and conventions (DESIGN.md): right-handed, Y-up, metres. Colours are linear Rec.709.
+//! Units and conventions (docs/ARCHITECTURE.md): right-handed, Y-up, metres. Colours are linear Rec.709.
 //! Light intensities follow KHR_lights_punctual numerically (point/spot in candela, directional in
 //! lux) but are used as radiometric quantities (W/sr, W/m²) with no luminous-efficacy factor,
 //! as most renderers do; emission is `emissive × emissive_strength` in W/(m²·sr).
