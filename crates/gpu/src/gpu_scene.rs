@@ -200,6 +200,48 @@ impl GpuScene {
         scene: &Scene,
         rects: Option<&[Option<UvRect>]>,
     ) -> GpuScene {
+        let mut g = Geometry::new(scene, rects);
+        if g.vertices.is_empty() {
+            g.lo = Vec3::ZERO;
+            g.hi = Vec3::ZERO;
+            // wgpu does not allow empty buffers to be bound as vertex buffers.
+            g.vertices.push(Vertex::zeroed());
+            g.indices.extend([0, 0, 0]);
+        }
+        let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene vertices"),
+            contents: bytemuck::cast_slice(&g.vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let ib = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene indices"),
+            contents: bytemuck::cast_slice(&g.indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        GpuScene {
+            vertices: vb,
+            indices: ib,
+            triangles: g.draws.iter().map(|d| d.index_count as usize / 3).sum(),
+            draws: g.draws,
+            materials: upload_materials(device, queue, scene),
+            bounds: (g.lo, g.hi),
+        }
+    }
+}
+
+/// The scene flattened to world space: one vertex and index range per instance.
+struct Geometry {
+    vertices: Vec<Vertex>,
+    indices: Vec<u32>,
+    draws: Vec<Draw>,
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Geometry {
+    /// Every instance's vertices in world space (light-map UVs placed in their page rectangle
+    /// when `rects` has one), counter-clockwise triangles, and its draw.
+    fn new(scene: &Scene, rects: Option<&[Option<UvRect>]>) -> Geometry {
         let mut vertices: Vec<Vertex> = vec![];
         let mut indices: Vec<u32> = vec![];
         let mut draws = vec![];
@@ -275,168 +317,160 @@ impl GpuScene {
                 volume: casts_volume.then(|| VolumeMesh::new(&world, &local)),
             });
         }
-        if vertices.is_empty() {
-            lo = Vec3::ZERO;
-            hi = Vec3::ZERO;
-            // wgpu does not allow empty buffers to be bound as vertex buffers.
-            vertices.push(Vertex::zeroed());
-            indices.extend([0, 0, 0]);
-        }
-        let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("scene vertices"),
-            contents: bytemuck::cast_slice(&vertices),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let ib = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("scene indices"),
-            contents: bytemuck::cast_slice(&indices),
-            usage: wgpu::BufferUsages::INDEX,
-        });
-
-        let layout = material_layout(device);
-        let white = upload_texture(
-            device,
-            queue,
-            &Texture {
-                name: "white".into(),
-                width: 1,
-                height: 1,
-                data: vec![Vec4::ONE],
-                srgb: false,
-            },
-        );
-        let textures: Vec<wgpu::TextureView> = scene
-            .textures
-            .iter()
-            .map(|t| upload_texture(device, queue, t))
-            .collect();
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("material"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            address_mode_w: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            anisotropy_clamp: 8,
-            ..Default::default()
-        });
-        let fallback = [lightlab_scene::Material::default()];
-        let list: &[lightlab_scene::Material] = if scene.materials.is_empty() {
-            &fallback
-        } else {
-            &scene.materials
-        };
-        let materials = list
-            .iter()
-            .map(|m| {
-                let refs = [
-                    m.base_color_texture,
-                    m.metallic_roughness_texture,
-                    m.normal_texture,
-                    m.emissive_texture,
-                ];
-                let mut flags = 0u32;
-                let mut uv_sets = 0u32;
-                if let Some(r) = m.transmission_texture {
-                    // Bit 5 (bit 4 is double-sided).
-                    flags |= 32;
-                    uv_sets |= (r.uv_set & 1) << 5;
-                }
-                for (i, r) in refs.iter().enumerate() {
-                    if let Some(r) = r {
-                        flags |= 1 << i;
-                        uv_sets |= (r.uv_set & 1) << i;
-                    }
-                }
-                if m.double_sided {
-                    flags |= 16;
-                }
-                let gm = GpuMaterial {
-                    base_color: m.base_color.to_array(),
-                    emissive: (m.emissive * m.emissive_strength).to_array(),
-                    metallic: m.metallic,
-                    roughness: m.roughness,
-                    specular: m.specular,
-                    normal_scale: m.normal_scale,
-                    alpha_cutoff: match m.alpha_mode {
-                        AlphaMode::Mask { cutoff } => cutoff,
-                        // Blended surfaces are drawn as alpha-tested at ½ (no sorting yet).
-                        AlphaMode::Blend => 0.5,
-                        AlphaMode::Opaque => -1.0,
-                    },
-                    transmission: m.transmission,
-                    model: match m.brdf {
-                        lightlab_scene::BrdfModel::Pbr => 0,
-                        lightlab_scene::BrdfModel::Lambert => 1,
-                        lightlab_scene::BrdfModel::Phong => 2,
-                        lightlab_scene::BrdfModel::BlinnPhong => 3,
-                    },
-                    flags,
-                    uv_sets,
-                    sway: m.sway,
-                    pad0: 0.0,
-                    pad1: 0.0,
-                    pad2: 0.0,
-                };
-                let ubuf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(&m.name),
-                    contents: bytemuck::bytes_of(&gm),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
-                let view = |r: Option<lightlab_scene::TextureRef>| {
-                    r.map_or(&white, |r| &textures[r.texture])
-                };
-                let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(&m.name),
-                    layout: &layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: ubuf.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::TextureView(view(refs[0])),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::TextureView(view(refs[1])),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: wgpu::BindingResource::TextureView(view(refs[2])),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 4,
-                            resource: wgpu::BindingResource::TextureView(view(refs[3])),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 5,
-                            resource: wgpu::BindingResource::Sampler(&sampler),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 6,
-                            resource: wgpu::BindingResource::TextureView(view(
-                                m.transmission_texture,
-                            )),
-                        },
-                    ],
-                });
-                GpuMaterialBinding {
-                    bind_group,
-                    double_sided: m.double_sided,
-                    alpha_masked: m.alpha_mode != AlphaMode::Opaque,
-                }
-            })
-            .collect();
-        GpuScene {
-            vertices: vb,
-            indices: ib,
-            triangles: draws.iter().map(|d| d.index_count as usize / 3).sum(),
+        Geometry {
+            vertices,
+            indices,
             draws,
-            materials,
-            bounds: (lo, hi),
+            lo,
+            hi,
         }
+    }
+}
+
+/// Every material's uniforms and textures as a bind group (one default material when the
+/// scene has none), with a white texture where a map is missing.
+fn upload_materials(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &Scene,
+) -> Vec<GpuMaterialBinding> {
+    let layout = material_layout(device);
+    let white = upload_texture(
+        device,
+        queue,
+        &Texture {
+            name: "white".into(),
+            width: 1,
+            height: 1,
+            data: vec![Vec4::ONE],
+            srgb: false,
+        },
+    );
+    let textures: Vec<wgpu::TextureView> = scene
+        .textures
+        .iter()
+        .map(|t| upload_texture(device, queue, t))
+        .collect();
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("material"),
+        address_mode_u: wgpu::AddressMode::Repeat,
+        address_mode_v: wgpu::AddressMode::Repeat,
+        address_mode_w: wgpu::AddressMode::Repeat,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        mipmap_filter: wgpu::MipmapFilterMode::Linear,
+        anisotropy_clamp: 8,
+        ..Default::default()
+    });
+    let fallback = [lightlab_scene::Material::default()];
+    let list: &[lightlab_scene::Material] = if scene.materials.is_empty() {
+        &fallback
+    } else {
+        &scene.materials
+    };
+    let textures = MaterialTextures {
+        layout: &layout,
+        white: &white,
+        textures: &textures,
+        sampler: &sampler,
+    };
+    list.iter()
+        .map(|m| material_binding(device, &textures, m))
+        .collect()
+}
+
+/// What every material's bind group shares.
+struct MaterialTextures<'a> {
+    layout: &'a wgpu::BindGroupLayout,
+    white: &'a wgpu::TextureView,
+    textures: &'a [wgpu::TextureView],
+    sampler: &'a wgpu::Sampler,
+}
+
+/// A material's GPU uniforms: factors, which maps it has and their UV sets, its model.
+fn gpu_material(m: &lightlab_scene::Material) -> GpuMaterial {
+    let refs = [
+        m.base_color_texture,
+        m.metallic_roughness_texture,
+        m.normal_texture,
+        m.emissive_texture,
+    ];
+    let mut flags = 0u32;
+    let mut uv_sets = 0u32;
+    if let Some(r) = m.transmission_texture {
+        // Bit 5 (bit 4 is double-sided).
+        flags |= 32;
+        uv_sets |= (r.uv_set & 1) << 5;
+    }
+    for (i, r) in refs.iter().enumerate() {
+        if let Some(r) = r {
+            flags |= 1 << i;
+            uv_sets |= (r.uv_set & 1) << i;
+        }
+    }
+    if m.double_sided {
+        flags |= 16;
+    }
+    GpuMaterial {
+        base_color: m.base_color.to_array(),
+        emissive: (m.emissive * m.emissive_strength).to_array(),
+        metallic: m.metallic,
+        roughness: m.roughness,
+        specular: m.specular,
+        normal_scale: m.normal_scale,
+        alpha_cutoff: match m.alpha_mode {
+            AlphaMode::Mask { cutoff } => cutoff,
+            // Blended surfaces are drawn as alpha-tested at ½ (no sorting yet).
+            AlphaMode::Blend => 0.5,
+            AlphaMode::Opaque => -1.0,
+        },
+        transmission: m.transmission,
+        model: match m.brdf {
+            lightlab_scene::BrdfModel::Pbr => 0,
+            lightlab_scene::BrdfModel::Lambert => 1,
+            lightlab_scene::BrdfModel::Phong => 2,
+            lightlab_scene::BrdfModel::BlinnPhong => 3,
+        },
+        flags,
+        uv_sets,
+        sway: m.sway,
+        pad0: 0.0,
+        pad1: 0.0,
+        pad2: 0.0,
+    }
+}
+
+/// A material's bind group: uniforms, its four maps, the sampler, its transmission map.
+fn material_binding(
+    device: &wgpu::Device,
+    t: &MaterialTextures,
+    m: &lightlab_scene::Material,
+) -> GpuMaterialBinding {
+    let ubuf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(&m.name),
+        contents: bytemuck::bytes_of(&gpu_material(m)),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let view = |r: Option<lightlab_scene::TextureRef>| {
+        wgpu::BindingResource::TextureView(r.map_or(t.white, |r| &t.textures[r.texture]))
+    };
+    let e = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(&m.name),
+        layout: t.layout,
+        entries: &[
+            e(0, ubuf.as_entire_binding()),
+            e(1, view(m.base_color_texture)),
+            e(2, view(m.metallic_roughness_texture)),
+            e(3, view(m.normal_texture)),
+            e(4, view(m.emissive_texture)),
+            e(5, wgpu::BindingResource::Sampler(t.sampler)),
+            e(6, view(m.transmission_texture)),
+        ],
+    });
+    GpuMaterialBinding {
+        bind_group,
+        double_sided: m.double_sided,
+        alpha_masked: m.alpha_mode != AlphaMode::Opaque,
     }
 }

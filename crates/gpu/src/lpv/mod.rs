@@ -18,7 +18,7 @@
 //! normal is not injected) and one that is not roughly planar (|Σ n·A| < ½ΣA) is skipped.
 
 use crate::GpuContext;
-use crate::gpu_scene::{GpuScene, vertex_layout};
+use crate::gpu_scene::GpuScene;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use glam::camera::rh::proj::directx;
@@ -27,13 +27,15 @@ use lightlab_core::lpv::{self, Grid};
 use lightlab_scene::{LightKind, Scene};
 use wgpu::util::DeviceExt;
 
+mod setup;
+
 /// WGSL of the LPV passes: common.wgsl, material.wgsl, lpv.wgsl.
 pub static LPV_SOURCE: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
     format!(
         "{}\n{}\n{}",
         crate::uniforms::COMMON_WGSL,
         crate::uniforms::MATERIAL_WGSL,
-        include_str!("shaders/lpv.wgsl")
+        include_str!("../shaders/lpv.wgsl")
     )
 });
 
@@ -404,6 +406,7 @@ const RSM_FORMATS: [wgpu::TextureFormat; 3] = [
 ];
 const SLOT: u64 = 256;
 
+/// The compute pipelines of injection, propagation and storing.
 struct Compute {
     inject: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
@@ -465,7 +468,6 @@ impl Lpv {
             .normalize_or(-Vec3::Z);
         let grids = settings.grids_for(scene, eye, forward);
         let grid = *grids.last().expect("at least one cascade");
-        let count = grids.len();
         let size = settings.rsm_size;
         let mut lights = rsm_lights(scene, &grid, size);
         let bound = lights.iter().map(|l| l.1).sum::<f32>().max(1e-12);
@@ -474,343 +476,34 @@ impl Lpv {
             // First, so that the last view rendered (the RSM textures' content) is a light's.
             lights.insert(0, (camera_view(camera, aspect, &grid, size), 0.0));
         }
-        let n = grid.n;
-        let cells = (n as u64).pow(3);
-        let gv_cells = (n as u64 + 1).pow(3);
-        // Fixed point: the largest |coefficient| is below 1.03·Φ/π of all the RSMs' flux.
-        let base = LpvUniforms {
-            origin: grid.origin.to_array(),
-            cell: grid.cell,
-            n,
-            use_gv: 0,
-            scale: (1u32 << 30) as f32 / bound,
-            gv_scale: 65536.0,
-            rsm_size: size,
-            wpi_samples: settings.wpi_samples,
-            store_last: (settings.scheme == LpvScheme::Wpi) as u32,
-            occlusion: 0,
-            reemit: (settings.reemit == lpv::Reemit::Central) as u32,
-            wind_a: wind.uniform()[0],
-            wind_b: wind.uniform()[1],
-            ..Default::default()
-        };
-        let gv_on = settings.occlusion && settings.scheme == LpvScheme::Kaplanyan;
-        let base = LpvUniforms {
-            occlusion: gv_on as u32,
-            ..base
-        };
-        // Two slots per cascade: without and with the geometry volume.
-        let mut uniform_bytes = vec![0u8; 2 * count * SLOT as usize];
-        for (c, g) in grids.iter().enumerate() {
-            for (k, use_gv) in [0u32, gv_on as u32].into_iter().enumerate() {
-                let u = LpvUniforms {
-                    origin: g.origin.to_array(),
-                    cell: g.cell,
-                    use_gv,
-                    layer: c as u32 * n,
-                    ..base
-                };
-                let o = (2 * c + k) * SLOT as usize;
-                uniform_bytes[o..o + std::mem::size_of::<LpvUniforms>()]
-                    .copy_from_slice(bytemuck::bytes_of(&u));
-            }
-        }
+        let uniform_bytes = setup::uniform_slots(&settings, &grids, bound, wind);
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lpv uniforms"),
             contents: &uniform_bytes,
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let mut light_bytes = vec![0u8; SLOT as usize * lights.len().max(1)];
-        for (i, (l, _)) in lights.iter().enumerate() {
-            let o = i * SLOT as usize;
-            light_bytes[o..o + std::mem::size_of::<RsmLight>()]
-                .copy_from_slice(bytemuck::bytes_of(l));
-        }
-        let light_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("rsm lights"),
-            contents: &light_bytes,
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let storage = |label, bytes: u64, extra| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes.max(16),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | extra,
-                mapped_at_creation: false,
-            })
-        };
-        let textures = ["lpv r", "lpv g", "lpv b"].map(|label| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: n,
-                    height: n,
-                    depth_or_array_layers: n * count as u32,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D3,
-                format: wgpu::TextureFormat::Rgba16Float,
-                usage: wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        });
-        let rsm_textures: Vec<wgpu::Texture> = RSM_FORMATS
-            .iter()
-            .zip(["rsm flux", "rsm normal", "rsm position"])
-            .map(|(f, label)| {
-                crate::resources::texture(
-                    device,
-                    label,
-                    size,
-                    size,
-                    1,
-                    *f,
-                    wgpu::TextureUsages::RENDER_ATTACHMENT
-                        | wgpu::TextureUsages::TEXTURE_BINDING
-                        | wgpu::TextureUsages::COPY_SRC,
-                )
-            })
-            .collect();
-        let rsm_views: Vec<wgpu::TextureView> = rsm_textures
-            .iter()
-            .map(|t| t.create_view(&Default::default()))
-            .collect();
-        let rsm_depth = crate::resources::texture(
-            device,
-            "rsm depth",
-            size,
-            size,
-            1,
-            wgpu::TextureFormat::Depth32Float,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        )
-        .create_view(&Default::default());
-
+        let light_buf = setup::light_slots(device, &lights);
+        let textures = setup::volume_textures(device, grid.n, grids.len() as u32);
+        let (rsm_textures, rsm_views, rsm_depth) = setup::rsm_targets(device, size);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lpv"),
             source: wgpu::ShaderSource::Wgsl(LPV_SOURCE.as_str().into()),
         });
-        use wgpu::ShaderStages as S;
-        let uniform_entry = |binding, visibility| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: true,
-                min_binding_size: None,
-            },
-            count: None,
+        let (rsm_pipeline, rsm_group) = setup::rsm_pass(device, &module, &uniforms, &light_buf);
+        let layout = setup::compute_layout(device);
+        let compute = setup::compute_pipelines(device, &module, &layout);
+        let inputs = setup::CascadeInputs {
+            layout: &layout,
+            uniforms: &uniforms,
+            lights: &light_buf,
+            rsm: &rsm_views,
+            out: &textures
+                .each_ref()
+                .map(|t| t.create_view(&Default::default())),
         };
-        let rsm_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("rsm"),
-            entries: &[
-                uniform_entry(0, S::VERTEX_FRAGMENT),
-                uniform_entry(1, S::VERTEX_FRAGMENT),
-            ],
-        });
-        let material_layout = crate::gpu_scene::material_layout(device);
-        let rsm_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("rsm"),
-            bind_group_layouts: &[Some(&rsm_layout), Some(&material_layout)],
-            immediate_size: 0,
-        });
-        let targets: Vec<Option<wgpu::ColorTargetState>> =
-            RSM_FORMATS.iter().map(|f| Some((*f).into())).collect();
-        let rsm_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("rsm"),
-            layout: Some(&rsm_pl),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("rsm_vs"),
-                compilation_options: Default::default(),
-                buffers: &[Some(vertex_layout())],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("rsm_fs"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        fn uniform_binding(
-            binding: u32,
-            buffer: &wgpu::Buffer,
-            size: usize,
-        ) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(size as u64),
-                }),
-            }
-        }
-        let rsm_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("rsm"),
-            layout: &rsm_layout,
-            entries: &[
-                uniform_binding(0, &uniforms, std::mem::size_of::<LpvUniforms>()),
-                uniform_binding(1, &light_buf, std::mem::size_of::<RsmLight>()),
-            ],
-        });
-
-        let texture_entry = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: S::COMPUTE,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
-        let storage_entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: S::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let out_entry = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: S::COMPUTE,
-            ty: wgpu::BindingType::StorageTexture {
-                access: wgpu::StorageTextureAccess::WriteOnly,
-                format: wgpu::TextureFormat::Rgba16Float,
-                view_dimension: wgpu::TextureViewDimension::D3,
-            },
-            count: None,
-        };
-        let compute_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lpv compute"),
-            entries: &[
-                uniform_entry(0, S::COMPUTE),
-                uniform_entry(1, S::COMPUTE),
-                texture_entry(2),
-                texture_entry(3),
-                texture_entry(4),
-                storage_entry(5, false),
-                storage_entry(6, false),
-                storage_entry(7, true),
-                storage_entry(8, false),
-                storage_entry(9, false),
-                storage_entry(10, false),
-                out_entry(11),
-                out_entry(12),
-                out_entry(13),
-            ],
-        });
-        let compute_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("lpv compute"),
-            bind_group_layouts: &[Some(&compute_layout)],
-            immediate_size: 0,
-        });
-        let cp = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&compute_pl),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let compute = Compute {
-            inject: cp("inject_cs"),
-            resolve: cp("resolve_cs"),
-            propagate: cp("propagate_cs"),
-            inject_wpi: cp("inject_wpi_cs"),
-            propagate_wpi: cp("propagate_wpi_cs"),
-            store: cp("store_cs"),
-        };
-        let out_views: Vec<wgpu::TextureView> = textures
+        let cascades = grids
             .iter()
-            .map(|t| t.create_view(&Default::default()))
-            .collect();
-        let read = wgpu::BufferUsages::COPY_SRC;
-        let none = wgpu::BufferUsages::empty();
-        let group = |src: &wgpu::Buffer,
-                     dst: &wgpu::Buffer,
-                     lpv_atomic: &wgpu::Buffer,
-                     gv_atomic: &wgpu::Buffer,
-                     accum: &wgpu::Buffer,
-                     gv: &wgpu::Buffer| {
-            let e = |binding, resource| wgpu::BindGroupEntry { binding, resource };
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("lpv compute"),
-                layout: &compute_layout,
-                entries: &[
-                    uniform_binding(0, &uniforms, std::mem::size_of::<LpvUniforms>()),
-                    uniform_binding(1, &light_buf, std::mem::size_of::<RsmLight>()),
-                    e(2, wgpu::BindingResource::TextureView(&rsm_views[0])),
-                    e(3, wgpu::BindingResource::TextureView(&rsm_views[1])),
-                    e(4, wgpu::BindingResource::TextureView(&rsm_views[2])),
-                    e(5, lpv_atomic.as_entire_binding()),
-                    e(6, gv_atomic.as_entire_binding()),
-                    e(7, src.as_entire_binding()),
-                    e(8, dst.as_entire_binding()),
-                    e(9, accum.as_entire_binding()),
-                    e(10, gv.as_entire_binding()),
-                    e(11, wgpu::BindingResource::TextureView(&out_views[0])),
-                    e(12, wgpu::BindingResource::TextureView(&out_views[1])),
-                    e(13, wgpu::BindingResource::TextureView(&out_views[2])),
-                ],
-            })
-        };
-        let cascades = (0..count)
-            .map(|_| {
-                let lpv_atomic = storage("lpv atomics", cells * CELL_BYTES, none);
-                // Blockers from the lights, then from the camera.
-                let gv_atomic = storage("gv atomics", 2 * gv_cells * 16, none);
-                let buffers = [
-                    storage("lpv a", cells * CELL_BYTES, read),
-                    storage("lpv b", cells * CELL_BYTES, read),
-                ];
-                let accum = storage("lpv accumulation", cells * CELL_BYTES, read);
-                let gv = storage("geometry volume", gv_cells * 16, read);
-                let groups = [
-                    group(
-                        &buffers[0],
-                        &buffers[1],
-                        &lpv_atomic,
-                        &gv_atomic,
-                        &accum,
-                        &gv,
-                    ),
-                    group(
-                        &buffers[1],
-                        &buffers[0],
-                        &lpv_atomic,
-                        &gv_atomic,
-                        &accum,
-                        &gv,
-                    ),
-                ];
-                Cascade {
-                    groups,
-                    lpv_atomic,
-                    gv_atomic,
-                    buffers,
-                }
-            })
+            .map(|g| setup::cascade(device, &inputs, g.n))
             .collect();
         Ok(Lpv {
             settings,
