@@ -94,8 +94,20 @@ pub fn all_shaders() -> Vec<(&'static str, &'static str)> {
     vec![
         ("common.wgsl", crate::uniforms::COMMON_WGSL),
         (
-            "common.wgsl + raster.wgsl",
-            crate::raster::SHADER_SOURCE.as_str(),
+            "common.wgsl + raster.wgsl + ambient_sky.wgsl",
+            crate::raster::shader_source(crate::raster::SourceKind::Sky),
+        ),
+        (
+            "common.wgsl + raster.wgsl + ambient_lightmap.wgsl",
+            crate::raster::shader_source(crate::raster::SourceKind::Lightmap),
+        ),
+        (
+            "common.wgsl + raster.wgsl + ambient_sh.wgsl",
+            crate::raster::shader_source(crate::raster::SourceKind::Sh),
+        ),
+        (
+            "common.wgsl + raster.wgsl + ambient_lpv.wgsl",
+            crate::raster::shader_source(crate::raster::SourceKind::Lpv),
         ),
         (
             "common.wgsl + prt_relit.wgsl",

@@ -23,39 +23,55 @@ pub struct FrameUniforms {
     pub normal_offset: f32,
     pub linear_bias: f32,
     pub shadow_size: f32,
-    /// 0: ambient from `ambient_sh`; 1: bilinear light-map; 2: bicubic light-map.
-    pub lightmap_mode: u32,
-    /// Number of E/π pages: directional page k is layer `lightmap_pages + k`.
-    pub lightmap_pages: u32,
-    pub lightmap_size: [f32; 2],
-    /// SH transfer: 0 off, 1 textured, 2 per vertex, 3 compressed.
-    pub sh_mode: u32,
-    /// vec4s per transfer vector: ⌈bands²/4⌉.
-    pub sh_layers: u32,
-    /// Sample points per group.
-    pub sh_points: u32,
-    /// 1: one group per instance; 0: one for the scene.
-    pub sh_per_object: u32,
-    /// Compressed reads: 0 nearest, 1 bilinear, 2 Fuchs's 4-tap.
-    pub sh_filter: u32,
-    pub sh_reps: u32,
-    pub sh_coeff_base: u32,
-    pub sh_groups: u32,
-    /// Light propagation volume: 0 off / 1 Kaplanyan / 2 WPI, cells per axis, 1 = indirect
-    /// light only (debug view), damping distance in cells, number of cascades, and per
-    /// cascade (finest first) the grid's origin and cell size.
-    pub lpv_mode: u32,
-    pub lpv_size: f32,
-    pub lpv_indirect_only: u32,
-    pub lpv_damping: f32,
-    pub lpv_cascades: u32,
-    pub lpv_pad0: u32,
-    pub lpv_pad1: u32,
-    pub lpv_pad2: u32,
-    pub lpv_grids: [[f32; 4]; 4],
     /// Wind sway (lightlab_core::wind::Wind::uniform).
     pub wind_a: [f32; 4],
     pub wind_b: [f32; 4],
+}
+
+/// The light-map source's uniforms (WGSL `LightmapUniforms`): `mode` 1 bilinear, 2 bicubic,
+/// +4 directional; E/π pages (directional page k is layer `pages + k`); page size in texels.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct LightmapUniforms {
+    pub mode: u32,
+    pub pages: u32,
+    pub size: [f32; 2],
+}
+
+/// The SH source's uniforms (WGSL `ShUniforms`), shared with the relighting pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ShUniforms {
+    /// 1 textured, 2 per vertex, 3 compressed.
+    pub mode: u32,
+    /// vec4s per transfer vector: ⌈bands²/4⌉.
+    pub layers: u32,
+    /// Sample points per group.
+    pub points: u32,
+    /// 1: one group per instance; 0: one for the scene.
+    pub per_object: u32,
+    /// Compressed reads: 0 nearest, 1 bilinear, 2 Fuchs's 4-tap.
+    pub read_filter: u32,
+    pub reps: u32,
+    pub coeff_base: u32,
+    pub groups: u32,
+}
+
+/// The volume source's uniforms (WGSL `LpvAmbientUniforms`): 1 Kaplanyan / 2 WPI, cells per
+/// axis, 1 = indirect light only (debug view), damping distance in cells, number of cascades,
+/// and per cascade (finest first) the grid's origin and cell size.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct LpvAmbientUniforms {
+    pub mode: u32,
+    pub size: f32,
+    pub indirect_only: u32,
+    pub damping: f32,
+    pub cascades: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+    pub grids: [[f32; 4]; 4],
 }
 
 /// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional, 3 area (an emissive
@@ -143,7 +159,7 @@ mod tests {
 
     #[test]
     fn rust_structs_match_the_wgsl_layout() {
-        let src = crate::raster::SHADER_SOURCE.as_str();
+        let src = crate::raster::shader_source(crate::raster::SourceKind::Sky);
         let checks = [
             (
                 "FrameUniforms",
@@ -162,28 +178,41 @@ mod tests {
                     normal_offset,
                     linear_bias,
                     shadow_size,
-                    lightmap_mode,
-                    lightmap_pages,
-                    lightmap_size,
-                    sh_mode,
-                    sh_layers,
-                    sh_points,
-                    sh_per_object,
-                    sh_filter,
-                    sh_reps,
-                    sh_coeff_base,
-                    sh_groups,
-                    lpv_mode,
-                    lpv_size,
-                    lpv_indirect_only,
-                    lpv_damping,
-                    lpv_cascades,
-                    lpv_pad0,
-                    lpv_pad1,
-                    lpv_pad2,
-                    lpv_grids,
                     wind_a,
                     wind_b
+                ),
+            ),
+            (
+                "LightmapUniforms",
+                rust_layout!(LightmapUniforms, mode, pages, size),
+            ),
+            (
+                "ShUniforms",
+                rust_layout!(
+                    ShUniforms,
+                    mode,
+                    layers,
+                    points,
+                    per_object,
+                    read_filter,
+                    reps,
+                    coeff_base,
+                    groups
+                ),
+            ),
+            (
+                "LpvAmbientUniforms",
+                rust_layout!(
+                    LpvAmbientUniforms,
+                    mode,
+                    size,
+                    indirect_only,
+                    damping,
+                    cascades,
+                    pad0,
+                    pad1,
+                    pad2,
+                    grids
                 ),
             ),
             (

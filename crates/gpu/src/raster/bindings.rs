@@ -1,7 +1,7 @@
 //! The renderer's bind-group layouts, named by role, and typed helpers for their entries.
 //!
 //! Groups: `frame` (0: frame uniforms, lights, shadow views, the per-pass slot), the
-//! material (1, `gpu_scene`), `lighting` (2: shadow maps and the ambient sources' resources),
+//! material (1, `gpu_scene`), `lighting` (2: shadow maps, then the ambient source's resources),
 //! and the full-screen inputs (3: G-buffer, tonemap source, sky).
 
 use wgpu::{BindGroupLayoutEntry as Entry, BindingType, ShaderStages, TextureViewDimension as Dim};
@@ -89,7 +89,8 @@ pub(super) struct GroupLayouts {
 }
 
 impl GroupLayouts {
-    pub fn new(device: &wgpu::Device) -> GroupLayouts {
+    /// The layouts of a renderer whose ambient source adds `source` to group 2.
+    pub fn new(device: &wgpu::Device, source: &[Entry]) -> GroupLayouts {
         use wgpu::SamplerBindingType as S;
         let frame = layout(
             device,
@@ -101,27 +102,14 @@ impl GroupLayouts {
                 buffer(3, wgpu::BufferBindingType::Uniform, true),
             ],
         );
-        // Shadow maps (0–2), light-maps or textured SH (3, 4), SH transfer and light (5–8),
-        // the light propagation volume (9–12).
-        let lighting = layout(
-            device,
-            "lighting",
-            &[
-                texture(0, wgpu::TextureSampleType::Depth, Dim::D2Array),
-                sampler(1, S::Comparison),
-                texel_texture(2, Dim::D2Array),
-                filtered_texture(3, Dim::D2Array),
-                sampler(4, S::Filtering),
-                storage(5),
-                storage(6),
-                texture(7, wgpu::TextureSampleType::Uint, Dim::D2Array),
-                storage(8),
-                filtered_texture(9, Dim::D3),
-                filtered_texture(10, Dim::D3),
-                filtered_texture(11, Dim::D3),
-                sampler(12, S::Filtering),
-            ],
-        );
+        // Shadow maps (0–2), then the ambient source's bindings (3..).
+        let mut entries = vec![
+            texture(0, wgpu::TextureSampleType::Depth, Dim::D2Array),
+            sampler(1, S::Comparison),
+            texel_texture(2, Dim::D2Array),
+        ];
+        entries.extend_from_slice(source);
+        let lighting = layout(device, "lighting", &entries);
         let gbuffer = layout(
             device,
             "g-buffer",

@@ -1,7 +1,7 @@
 //! Building a [`Renderer`]: checked settings, the camera, the light-map page layout, the
 //! lights and their shadow views, uniforms, pipelines, targets and bind groups.
 
-use super::ambient::{LightmapInput, ShResources, lpv_views, page_layout, sh_irradiance};
+use super::ambient::{AmbientSource, LightmapInput, page_layout, sh_irradiance};
 use super::bindings::{GroupLayouts, PipelineLayouts, entry};
 use super::light_set::LightSet;
 use super::pipelines::Pipelines;
@@ -9,11 +9,11 @@ use super::settings::{RasterError, RasterSettings, ShadowMethod, projection};
 use super::targets::{
     ShadowArrays, ShadowMaps, Targets, env_texture, gbuffer_formats, renderable_or,
 };
-use super::{Renderer, SHADER_SOURCE, SLOT};
+use super::{Renderer, SLOT, shader_source};
 use crate::GpuContext;
 use crate::gpu_scene::GpuScene;
-use crate::lpv::{Lpv, LpvScheme, LpvSettings};
-use crate::prt::{ShInput, ShTransfer};
+use crate::lpv::{Lpv, LpvSettings};
+use crate::prt::ShInput;
 use crate::uniforms::{FrameUniforms, PassUniforms, ShadowView};
 use bytemuck::Zeroable;
 use glam::Mat4;
@@ -106,20 +106,17 @@ impl FrameBuffers {
     }
 }
 
-/// The frame uniforms: camera, shadow settings, the ambient term and its source's parameters.
+/// The frame uniforms: camera, shadow settings and the sky's SH irradiance.
 fn frame_uniforms(
     scene: &Scene,
     s: &RasterSettings,
     camera: &Camera,
     lights: usize,
-    ambient: AmbientInput,
-    lpv: Option<&Lpv>,
-    page_size: [u32; 2],
 ) -> FrameUniforms {
     let aspect = s.width as f32 / s.height as f32;
     let view = camera.transform.inverse();
     let view_proj = projection(camera, aspect) * view;
-    let mut f = FrameUniforms {
+    FrameUniforms {
         view_proj: view_proj.to_cols_array_2d(),
         inv_view_proj: view_proj.inverse().to_cols_array_2d(),
         view: view.to_cols_array_2d(),
@@ -139,50 +136,7 @@ fn frame_uniforms(
         normal_offset: s.normal_offset,
         linear_bias: s.linear_bias,
         shadow_size: s.shadow_size as f32,
-        lightmap_size: [page_size[0] as f32, page_size[1] as f32],
-        lpv_size: 1.0,
-        lpv_cascades: 1,
-        lpv_grids: [[0.0, 0.0, 0.0, 1.0]; 4],
-        ..FrameUniforms::zeroed()
-    };
-    match ambient {
-        AmbientInput::Lightmap(lm) => {
-            f.lightmap_mode =
-                if lm.bicubic { 2 } else { 1 } | if lm.directional.is_some() { 4 } else { 0 };
-            f.lightmap_pages = lm.pages.len() as u32;
-        }
-        AmbientInput::Sh(sh) => {
-            let groups = sh.groups(scene.instances.len());
-            f.sh_mode = sh.mode();
-            f.sh_layers = crate::prt::layers(sh.bands) as u32;
-            f.sh_points = sh.points as u32;
-            f.sh_per_object = sh.per_object as u32;
-            if let ShTransfer::Compressed { filter, .. } = &sh.transfer {
-                f.sh_filter = filter.code();
-            }
-            f.sh_reps = sh.representatives() as u32;
-            f.sh_coeff_base = (groups * sh.points) as u32;
-            f.sh_groups = groups as u32;
-        }
-        AmbientInput::Lpv(_, indirect_only) => f.lpv_indirect_only = indirect_only as u32,
-        AmbientInput::None => {}
     }
-    if let Some(l) = lpv {
-        f.lpv_mode = match l.settings.scheme {
-            LpvScheme::Kaplanyan => 1,
-            LpvScheme::Wpi => 2,
-        };
-        f.lpv_size = l.grids[0].n as f32;
-        f.lpv_cascades = l.grids.len() as u32;
-        for (k, grid) in l.grids.iter().enumerate() {
-            f.lpv_grids[k] = grid.origin.extend(grid.cell).to_array();
-        }
-        f.lpv_damping = match l.settings.scheme {
-            LpvScheme::Kaplanyan => l.settings.damping,
-            LpvScheme::Wpi => 0.0,
-        };
-    }
-    f
 }
 
 /// The bind groups of the lighting passes and of the full-screen passes.
@@ -193,17 +147,13 @@ struct Groups {
     tonemap: wgpu::BindGroup,
 }
 
-/// Group 2: the shadow maps and the ambient sources' resources.
+/// Group 2: the shadow maps, then the ambient source's resources.
 fn lighting_group(
-    ctx: &GpuContext,
+    device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     shadow: &ShadowArrays,
-    ambient: AmbientInput,
-    sh: &ShResources,
-    lpv: Option<&Lpv>,
-    page_size: [u32; 2],
+    ambient: &AmbientSource,
 ) -> wgpu::BindGroup {
-    let device = &ctx.device;
     let cmp = device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some("shadow compare"),
         mag_filter: wgpu::FilterMode::Linear,
@@ -211,33 +161,16 @@ fn lighting_group(
         compare: Some(wgpu::CompareFunction::LessEqual),
         ..Default::default()
     });
-    let (lm_view, lm_sampler) =
-        super::ambient::upload_lightmaps(ctx, ambient.lightmap(), ambient.sh(), page_size);
-    let lpv_views = lpv_views(ctx, lpv);
-    let lpv_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-        label: Some("lpv"),
-        mag_filter: wgpu::FilterMode::Linear,
-        min_filter: wgpu::FilterMode::Linear,
-        ..Default::default()
-    });
+    let mut entries = vec![
+        entry(0, R::TextureView(&shadow.depth)),
+        entry(1, R::Sampler(&cmp)),
+        entry(2, R::TextureView(&shadow.linear)),
+    ];
+    entries.extend(ambient.entries());
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lighting"),
         layout,
-        entries: &[
-            entry(0, R::TextureView(&shadow.depth)),
-            entry(1, R::Sampler(&cmp)),
-            entry(2, R::TextureView(&shadow.linear)),
-            entry(3, R::TextureView(&lm_view)),
-            entry(4, R::Sampler(&lm_sampler)),
-            entry(5, sh.vertex.as_entire_binding()),
-            entry(6, sh.light.as_entire_binding()),
-            entry(7, R::TextureView(&sh.index)),
-            entry(8, sh.relit.as_entire_binding()),
-            entry(9, R::TextureView(&lpv_views[0])),
-            entry(10, R::TextureView(&lpv_views[1])),
-            entry(11, R::TextureView(&lpv_views[2])),
-            entry(12, R::Sampler(&lpv_sampler)),
-        ],
+        entries: &entries,
     })
 }
 
@@ -352,32 +285,27 @@ impl Renderer {
         let device = &ctx.device;
         let (page_size, rects) = page_layout(ambient.lightmap(), ambient.sh());
         let gscene = GpuScene::with_lightmap_uvs(device, &ctx.queue, scene, rects.as_deref());
-        let lpv = match ambient {
-            AmbientInput::Lpv(l, _) => {
+        let source = match ambient {
+            AmbientInput::None => AmbientSource::Sky,
+            AmbientInput::Lightmap(lm) => AmbientSource::lightmap(ctx, lm, page_size),
+            AmbientInput::Sh(sh) => AmbientSource::sh(ctx, sh, scene.instances.len(), page_size),
+            AmbientInput::Lpv(l, indirect_only) => {
                 let aspect = s.width as f32 / s.height as f32;
                 let v = Lpv::new(ctx, scene, l.clone(), &camera, aspect, &s.wind)?;
-                Some(v)
+                AmbientSource::lpv(ctx, v, indirect_only)
             }
-            _ => None,
         };
         // A light-map holds the emitters' light already; SH transfer is lit by its SH light only.
         let area_lights =
             s.area_lights && matches!(ambient, AmbientInput::None | AmbientInput::Lpv(..));
         let ls = LightSet::new(scene, s, &camera, gscene.bounds, area_lights);
-        let frame = frame_uniforms(
-            scene,
-            s,
-            &camera,
-            ls.light_pos.len(),
-            ambient,
-            lpv.as_ref(),
-            page_size,
-        );
+        let frame = frame_uniforms(scene, s, &camera, ls.light_pos.len());
         let buffers = FrameBuffers::new(device, &frame, &ls);
-        let layouts = GroupLayouts::new(device);
+        let kind = source.kind();
+        let layouts = GroupLayouts::new(device, &kind.layout_entries());
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raster"),
-            source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.as_str().into()),
+            source: wgpu::ShaderSource::Wgsl(shader_source(kind).into()),
         });
         let linear_format = renderable_or(
             ctx,
@@ -394,16 +322,7 @@ impl Renderer {
         );
         let targets = Targets::new(ctx, s);
         let (shadow, arrays) = ShadowMaps::new(ctx, s, ls.views.len(), linear_format);
-        let sh = ShResources::new(ctx, ambient.sh(), &frame, page_size, &buffers.frame);
-        let lighting = lighting_group(
-            ctx,
-            &layouts.lighting,
-            &arrays,
-            ambient,
-            &sh,
-            lpv.as_ref(),
-            page_size,
-        );
+        let lighting = lighting_group(device, &layouts.lighting, &arrays, &source);
         let g = groups(device, &layouts, &buffers, &targets, lighting);
         let sky_group = scene
             .environment
@@ -417,8 +336,8 @@ impl Renderer {
                     entries: &[entry(5, R::TextureView(&view))],
                 })
             });
-        let lpv_passes = lpv.as_ref().map_or(0, |l| 2 * l.light_count() + 1);
-        let queries = queries(ctx, 5 + 2 * ls.lights.len() + ls.views.len() + lpv_passes);
+        let prepasses = source.prepass_count();
+        let queries = queries(ctx, 5 + 2 * ls.lights.len() + ls.views.len() + prepasses);
         Ok(Renderer {
             settings,
             scene: gscene,
@@ -444,8 +363,7 @@ impl Renderer {
             volume_ranges: vec![],
             queries,
             frame,
-            sh,
-            lpv,
+            ambient: source,
         })
     }
 }

@@ -30,7 +30,7 @@ mod readback;
 mod settings;
 mod targets;
 
-pub use ambient::LightmapInput;
+pub use ambient::{LightmapInput, SourceKind};
 pub use settings::{
     Ambient, BadAmbient, FrameTimes, MAX_AREA_LIGHTS, RasterError, RasterSettings, RenderPath,
     ShadowMethod, projection,
@@ -44,19 +44,32 @@ use crate::uniforms::*;
 use build::AmbientInput;
 use glam::{Mat4, Vec3, Vec4};
 use lightlab_scene::{Camera, Scene};
-use passes::timestamp_slot;
 use settings::check_wind;
 use std::time::Instant;
 
-/// WGSL of the renderer: common.wgsl, material.wgsl, raster.wgsl.
-pub static SHADER_SOURCE: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
-    format!(
-        "{}\n{}\n{}",
-        crate::uniforms::COMMON_WGSL,
-        crate::uniforms::MATERIAL_WGSL,
-        include_str!("../shaders/raster.wgsl")
-    )
-});
+/// WGSL of a renderer with ambient source `kind`: common.wgsl, material.wgsl, raster.wgsl and
+/// the source's ambient_*.wgsl.
+pub fn shader_source(kind: SourceKind) -> &'static str {
+    static SOURCES: std::sync::LazyLock<Vec<String>> = std::sync::LazyLock::new(|| {
+        SourceKind::ALL
+            .iter()
+            .map(|k| {
+                format!(
+                    "{}\n{}\n{}\n{}",
+                    crate::uniforms::COMMON_WGSL,
+                    crate::uniforms::MATERIAL_WGSL,
+                    include_str!("../shaders/raster.wgsl"),
+                    k.wgsl()
+                )
+            })
+            .collect()
+    });
+    let i = SourceKind::ALL
+        .iter()
+        .position(|k| *k == kind)
+        .expect("a kind");
+    &SOURCES[i]
+}
 
 /// Bytes between the per-pass uniform slots (the dynamic-offset alignment).
 const SLOT: u64 = 256;
@@ -90,8 +103,7 @@ pub struct Renderer {
     volume_ranges: Vec<std::ops::Range<u32>>,
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: FrameUniforms,
-    sh: ambient::ShResources,
-    lpv: Option<crate::lpv::Lpv>,
+    ambient: ambient::AmbientSource,
 }
 
 impl Renderer {
@@ -141,7 +153,7 @@ impl Renderer {
 
     /// The light propagation volume, if this renderer has one.
     pub fn lpv(&self) -> Option<&crate::lpv::Lpv> {
-        self.lpv.as_ref()
+        self.ambient.volume()
     }
 
     /// The SH light of the next frame: `points` (groups × sample points) and per point its
@@ -152,9 +164,14 @@ impl Renderer {
         points: &[Vec3],
         coeffs: &[Vec3],
     ) -> Result<(), RasterError> {
-        let gp = (self.frame.sh_groups * self.frame.sh_points) as usize;
-        let nc = self.sh.bands * self.sh.bands;
-        if self.frame.sh_mode == 0 || points.len() != gp || coeffs.len() != gp * nc {
+        let ambient::AmbientSource::Sh(sh) = &self.ambient else {
+            return Err(RasterError::Settings(
+                "only a renderer built with SH transfer takes an SH light".into(),
+            ));
+        };
+        let gp = (sh.uniforms.groups * sh.uniforms.points) as usize;
+        let nc = sh.bands * sh.bands;
+        if points.len() != gp || coeffs.len() != gp * nc {
             return Err(RasterError::Settings(format!(
                 "the SH light needs {gp} sample points and {} coefficients (got {} and {})",
                 gp * nc,
@@ -162,9 +179,9 @@ impl Renderer {
                 coeffs.len()
             )));
         }
-        let data = crate::prt::pack_light(points, coeffs, self.sh.bands);
+        let data = crate::prt::pack_light(points, coeffs, sh.bands);
         ctx.queue
-            .write_buffer(&self.sh.light, 0, bytemuck::cast_slice(&data));
+            .write_buffer(&sh.light, 0, bytemuck::cast_slice(&data));
         Ok(())
     }
 
@@ -195,7 +212,7 @@ impl Renderer {
         [self.frame.wind_a, self.frame.wind_b] = wind.uniform();
         ctx.queue
             .write_buffer(&self.frame_buf, 0, bytemuck::bytes_of(&self.frame));
-        if let Some(l) = &mut self.lpv {
+        if let Some(l) = self.ambient.volume_mut() {
             l.set_wind(ctx, &wind);
         }
         Ok(())
@@ -229,14 +246,7 @@ impl Renderer {
         }
         let mut labels = vec![];
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        self.relight_pass(&mut enc, &mut labels);
-        if let Some(lpv) = &self.lpv {
-            let queries = self.queries.as_ref();
-            let labels = &mut labels;
-            lpv.record(&mut enc, &self.scene, &mut |label| {
-                timestamp_slot(queries, labels, label)
-            });
-        }
+        self.prepasses(&mut enc, &mut labels);
         if self.settings.shadows.map() {
             self.shadow_map_passes(&mut enc, &mut labels);
         }
@@ -245,7 +255,7 @@ impl Renderer {
             &mut labels,
             self.settings.path == RenderPath::Deferred,
         );
-        if self.frame.lpv_indirect_only == 0 {
+        if !self.ambient.indirect_only() {
             self.sky_pass(&mut enc, &mut labels);
             self.light_passes(&mut enc, &mut labels);
         }

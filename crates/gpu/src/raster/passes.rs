@@ -154,27 +154,13 @@ impl Renderer {
         })
     }
 
-    /// Compressed SH light-maps: relight every representative under this frame's light.
-    pub(super) fn relight_pass(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        labels: &mut Vec<&'static str>,
-    ) {
-        let Some((pipeline, group, wg)) = &self.sh.relight else {
-            return;
-        };
-        let ts = self.timestamps(labels, "sh relight");
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("sh relight"),
-            timestamp_writes: ts.map(|t| wgpu::ComputePassTimestampWrites {
-                query_set: t.query_set,
-                beginning_of_pass_write_index: t.beginning_of_pass_write_index,
-                end_of_pass_write_index: t.end_of_pass_write_index,
-            }),
+    /// The ambient source's passes before the frame's (SH relighting, the volume's RSMs,
+    /// injection and propagation).
+    pub(super) fn prepasses(&self, enc: &mut wgpu::CommandEncoder, labels: &mut Vec<&'static str>) {
+        let queries = self.queries.as_ref();
+        self.ambient.prepasses(enc, &self.scene, &mut |label| {
+            timestamp_slot(queries, labels, label)
         });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups(wg[0], wg[1], 1);
     }
 
     pub(super) fn shadow_map_passes(

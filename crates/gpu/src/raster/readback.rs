@@ -58,7 +58,7 @@ impl Renderer {
         }
         let mut labels = vec![];
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        self.relight_pass(&mut enc, &mut labels);
+        self.prepasses(&mut enc, &mut labels);
         if self.settings.shadows.map() {
             self.shadow_map_passes(&mut enc, &mut labels);
         }

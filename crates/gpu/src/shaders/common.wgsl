@@ -23,43 +23,48 @@ struct FrameUniforms {
     // Heidrich variant: bias on the normalised linear depth.
     linear_bias: f32,
     shadow_size: f32,
-    // 0: ambient from ambient_sh; 1: bilinear light-map; 2: bicubic light-map; +4: directional.
-    lightmap_mode: u32,
-    // E/π pages; directional page k is layer lightmap_pages + k.
-    lightmap_pages: u32,
-    // Light-map page size in texels.
-    lightmap_size: vec2<f32>,
-    // SH transfer (PRT techniques): 0 off; 1 textured (coefficients 4j..4j+3 in light-map layer
-    // page·sh_layers + j); 2 per vertex; 3 compressed (index map + relit representatives).
-    sh_mode: u32,
-    // RGBA layers (vec4s) per transfer vector: ⌈bands²/4⌉.
-    sh_layers: u32,
-    // Incident-light sample points per group; groups are instances (1) or the scene (0).
-    sh_points: u32,
-    sh_per_object: u32,
-    // Compressed reads: 0 nearest, 1 bilinear of relit representatives, 2 Fuchs's 4-tap.
-    sh_filter: u32,
-    // Representatives of the compressed set.
-    sh_reps: u32,
-    // Where the light coefficients start in `sh_light` (after the sample points).
-    sh_coeff_base: u32,
-    // Number of groups.
-    sh_groups: u32,
-    // Light propagation volume (lpv.wgsl): 0 off / 1 Kaplanyan (irradiance) / 2 WPI (point
-    // evaluation at −n), cells per axis, 1 = indirect light only, damping [cells], cascades.
-    lpv_mode: u32,
-    lpv_size: f32,
-    lpv_indirect_only: u32,
-    lpv_damping: f32,
-    lpv_cascades: u32,
-    lpv_pad0: u32,
-    lpv_pad1: u32,
-    lpv_pad2: u32,
-    // Per cascade, finest first: origin (xyz) and cell size (w).
-    lpv_grids: array<vec4<f32>, 4>,
     // Wind sway (lightlab_core::wind::Wind::uniform).
     wind_a: vec4<f32>,
     wind_b: vec4<f32>,
+}
+
+// The light-map source's reads: 1 bilinear, 2 bicubic, +4 directional; E/π pages (directional
+// page k is layer pages + k); the page size in texels.
+struct LightmapUniforms {
+    mode: u32,
+    pages: u32,
+    size: vec2<f32>,
+}
+
+// The SH source: 1 textured (coefficients 4j..4j+3 in layer page·layers + j), 2 per vertex,
+// 3 compressed (index map + relit representatives); vec4s per transfer vector (⌈bands²/4⌉);
+// incident-light sample points per group, groups being instances (per_object 1) or the scene;
+// compressed reads (0 nearest, 1 bilinear of relit representatives, 2 Fuchs's 4-tap); the
+// representatives; where the light coefficients start in sh_light; the number of groups.
+struct ShUniforms {
+    mode: u32,
+    layers: u32,
+    points: u32,
+    per_object: u32,
+    read_filter: u32,
+    reps: u32,
+    coeff_base: u32,
+    groups: u32,
+}
+
+// The volume source (ambient_lpv.wgsl): 1 Kaplanyan (irradiance) / 2 WPI (point evaluation at
+// −n), cells per axis, 1 = indirect light only, damping [cells], cascades, and per cascade
+// (finest first) origin (xyz) and cell size (w).
+struct LpvAmbientUniforms {
+    mode: u32,
+    size: f32,
+    indirect_only: u32,
+    damping: f32,
+    cascades: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+    grids: array<vec4<f32>, 4>,
 }
 
 // One light. kind: 0 point, 1 spot, 2 directional, 3 area (a Lambertian rectangle: centre

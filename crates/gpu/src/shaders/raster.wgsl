@@ -1,9 +1,11 @@
-// Rasterised lighting (issue 4): forward and deferred Phong after Fuchs (2005) §4.1, stencil
-// shadow volumes, shadow maps (depth comparison and Heidrich's linear-depth variant), projected
-// planar shadows. Compiled after common.wgsl and material.wgsl.
+// Rasterised lighting: forward and deferred Phong after Fuchs (2005) §4.1, stencil shadow
+// volumes, shadow maps (depth comparison and Heidrich's linear-depth variant), projected planar
+// shadows. Compiled after common.wgsl and material.wgsl, and before one ambient source
+// (ambient_sky, ambient_lightmap, ambient_sh or ambient_lpv.wgsl), which defines
+// `source_vertex` and `source_radiance` and its bindings 3.. of group 2.
 //
 // Bind groups: 0 frame (uniforms, lights, shadow views, per-pass uniforms), 1 material,
-// 2 shadow maps, 3 G-buffer (deferred lighting only).
+// 2 lighting (shadow maps, then the ambient source's), 3 G-buffer (deferred lighting only).
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 @group(0) @binding(1) var<storage, read> lights: array<GpuLight>;
@@ -15,21 +17,7 @@
 @group(2) @binding(1) var shadow_cmp: sampler_comparison;
 // Heidrich's linear depths (shadow_mode 2); otherwise the shadow maps' raw depths.
 @group(2) @binding(2) var shadow_linear: texture_2d_array<f32>;
-// Light-maps (E/π): one layer per page; UV1 carries the page in its integer part.
-@group(2) @binding(3) var lightmap: texture_2d_array<f32>;
-@group(2) @binding(4) var lightmap_sampler: sampler;
-// SH transfer: per-vertex vectors (sh_layers vec4s per vertex), the frame's light (sample points,
-// then per group and point sh_layers·4 RGB coefficients), the compressed index map and the
-// representatives relit this frame ((group·points + point)·reps + r).
-@group(2) @binding(5) var<storage, read> sh_vertex: array<vec4<f32>>;
-@group(2) @binding(6) var<storage, read> sh_light: array<vec4<f32>>;
-@group(2) @binding(7) var sh_index: texture_2d_array<u32>;
-@group(2) @binding(8) var<storage, read> sh_relit: array<vec4<f32>>;
-// Light propagation volume (r, g, b intensity SH per cell), trilinear.
-@group(2) @binding(9) var lpv_r: texture_3d<f32>;
-@group(2) @binding(10) var lpv_g: texture_3d<f32>;
-@group(2) @binding(11) var lpv_b: texture_3d<f32>;
-@group(2) @binding(12) var lpv_sampler: sampler;
+// Bindings 3 and up of group 2 belong to the ambient source (ambient_*.wgsl).
 
 @group(3) @binding(0) var gb_diffuse: texture_2d<f32>;
 @group(3) @binding(1) var gb_normal: texture_2d<f32>;
@@ -45,8 +33,9 @@ struct VertexOut {
     @location(4) uv1: vec2<f32>,
     // The draw's scene instance.
     @location(5) @interpolate(flat) instance: u32,
-    // Per-vertex PRT: E/π shaded at the vertex (Gouraud).
-    @location(6) sh_radiance: vec3<f32>,
+    // The ambient source's per-vertex term (per-vertex PRT: E/π shaded at the vertex,
+    // Gouraud); zero for the others.
+    @location(6) vertex_light: vec3<f32>,
 }
 
 @vertex
@@ -64,114 +53,8 @@ fn scene_vs(
     o.uv0 = v.uv0;
     o.uv1 = v.uv1;
     o.instance = ii;
-    o.sh_radiance = vec3<f32>(0.0);
-    if frame.sh_mode == 2u {
-        let g = sh_group(ii);
-        let w = sh_weights(g, v.position);
-        for (var j = 0u; j < frame.sh_layers; j++) {
-            o.sh_radiance += sh_dot4(g, w, j, sh_vertex[vi * frame.sh_layers + j]);
-        }
-    }
+    o.vertex_light = source_vertex(v.position, vi, ii);
     return o;
-}
-
-// ---- SH transfer (PRT) -------------------------------------------------------------------------
-
-fn sh_group(instance: u32) -> u32 {
-    return select(0u, instance, frame.sh_per_object == 1u);
-}
-
-// Blend weights of the group's sample points at p: ∝ 1/distance, summing to 1
-// (lightlab_bake::sh_light::point_weights).
-fn sh_weights(g: u32, p: vec3<f32>) -> array<f32, 6> {
-    var w = array<f32, 6>(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    var total = 0.0;
-    for (var k = 0u; k < frame.sh_points; k++) {
-        let q = sh_light[g * frame.sh_points + k].xyz;
-        w[k] = 1.0 / max(length(p - q), 1e-6);
-        total += w[k];
-    }
-    for (var k = 0u; k < frame.sh_points; k++) {
-        w[k] /= total;
-    }
-    return w;
-}
-
-// Σ tᵢ·lᵢ over coefficients 4j..4j+3, the light blended from the group's sample points.
-fn sh_dot4(g: u32, w: array<f32, 6>, j: u32, t: vec4<f32>) -> vec3<f32> {
-    var e = vec3<f32>(0.0);
-    for (var k = 0u; k < frame.sh_points; k++) {
-        let b = frame.sh_coeff_base + (g * frame.sh_points + k) * 4u * frame.sh_layers + 4u * j;
-        e += w[k] * (t.x * sh_light[b].xyz + t.y * sh_light[b + 1u].xyz
-            + t.z * sh_light[b + 2u].xyz + t.w * sh_light[b + 3u].xyz);
-    }
-    return e;
-}
-
-// Textured transfer (SH light-maps, textured PRT): bilinear coefficient reads.
-fn sh_textured(uv1: vec2<f32>, g: u32, w: array<f32, 6>) -> vec3<f32> {
-    let page = floor(uv1.x);
-    let uv = vec2<f32>(uv1.x - page, uv1.y);
-    var e = vec3<f32>(0.0);
-    for (var j = 0u; j < frame.sh_layers; j++) {
-        let l = i32(u32(page) * frame.sh_layers + j);
-        e += sh_dot4(g, w, j, textureSampleLevel(lightmap, lightmap_sampler, uv, l, 0.0));
-    }
-    return e;
-}
-
-// One compressed texel: its representative, relit this frame, blended over sample points.
-fn sh_texel(c: vec2<i32>, page: i32, g: u32, w: array<f32, 6>) -> vec3<f32> {
-    let size = vec2<i32>(textureDimensions(sh_index));
-    let cc = clamp(c, vec2<i32>(0), size - 1);
-    let r = textureLoad(sh_index, cc, page, 0).x;
-    var e = vec3<f32>(0.0);
-    for (var k = 0u; k < frame.sh_points; k++) {
-        e += w[k] * sh_relit[(g * frame.sh_points + k) * frame.sh_reps + r].xyz;
-    }
-    return e;
-}
-
-// Compressed SH light-maps (Fuchs §5.6) with the filters of §5.8: nearest; bilinear of the
-// relit representatives (what hardware filtering would do to decompressed data); Fuchs's 4-tap
-// average of nearest decompressions at ±¼ texel.
-fn sh_compressed(uv1: vec2<f32>, g: u32, w: array<f32, 6>) -> vec3<f32> {
-    let page = floor(uv1.x);
-    let layer = i32(page);
-    let size = vec2<f32>(textureDimensions(sh_index));
-    let x = vec2<f32>(uv1.x - page, uv1.y) * size;
-    if frame.sh_filter == 1u {
-        let y = x - 0.5;
-        let i = vec2<i32>(floor(y));
-        let f = y - floor(y);
-        let a = sh_texel(i, layer, g, w);
-        let b = sh_texel(i + vec2<i32>(1, 0), layer, g, w);
-        let c = sh_texel(i + vec2<i32>(0, 1), layer, g, w);
-        let d = sh_texel(i + vec2<i32>(1, 1), layer, g, w);
-        return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
-    }
-    if frame.sh_filter == 2u {
-        var e = vec3<f32>(0.0);
-        for (var k = 0; k < 4; k++) {
-            let o = vec2<f32>(f32(k & 1) - 0.5, f32(k >> 1u) - 0.5) * 0.5;
-            e += 0.25 * sh_texel(vec2<i32>(floor(x + o)), layer, g, w);
-        }
-        return e;
-    }
-    return sh_texel(vec2<i32>(floor(x)), layer, g, w);
-}
-
-// E/π of the SH techniques at a fragment.
-fn sh_ambient(in: VertexOut) -> vec3<f32> {
-    if frame.sh_mode == 2u {
-        return in.sh_radiance;
-    }
-    let g = sh_group(in.instance);
-    let w = sh_weights(g, in.world);
-    if frame.sh_mode == 3u {
-        return sh_compressed(in.uv1, g, w);
-    }
-    return sh_textured(in.uv1, g, w);
 }
 
 fn uv_for(i: u32, in: VertexOut) -> vec2<f32> {
@@ -251,187 +134,14 @@ fn emission(in: VertexOut) -> vec3<f32> {
     return e;
 }
 
-// Bilinear light-map read at UV1 (page in the integer part of x).
-fn lightmap_bilinear(uv1: vec2<f32>, extra: u32) -> vec3<f32> {
-    let layer = floor(uv1.x);
-    let uv = vec2<f32>(uv1.x - layer, uv1.y);
-    return textureSampleLevel(lightmap, lightmap_sampler, uv, i32(layer) + i32(extra), 0.0).rgb;
-}
-
-// Cubic B-spline light-map read from four bilinear taps (the weights of each 2×2 pair folded
-// into one tap's position), as the CPU's `sample_bicubic`.
-fn lightmap_bicubic(uv1: vec2<f32>, extra: u32) -> vec3<f32> {
-    let layer = floor(uv1.x);
-    let size = frame.lightmap_size;
-    let x = vec2<f32>(uv1.x - layer, uv1.y) * size - 0.5;
-    let i = floor(x);
-    let f = x - i;
-    let f2 = f * f;
-    let f3 = f2 * f;
-    let w0 = (1.0 - f) * (1.0 - f) * (1.0 - f) / 6.0;
-    let w1 = (3.0 * f3 - 6.0 * f2 + 4.0) / 6.0;
-    let w2 = (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0) / 6.0;
-    let w3 = f3 / 6.0;
-    let g0 = w0 + w1;
-    let g1 = w2 + w3;
-    // Tap positions in texel units (texel k's centre is at k + 0.5).
-    let h0 = i - 1.0 + w1 / g0 + 0.5;
-    let h1 = i + 1.0 + w3 / g1 + 0.5;
-    let l = i32(layer) + i32(extra);
-    let a = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h0.x, h0.y) / size, l, 0.0).rgb;
-    let b = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h1.x, h0.y) / size, l, 0.0).rgb;
-    let c = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h0.x, h1.y) / size, l, 0.0).rgb;
-    let d = textureSampleLevel(lightmap, lightmap_sampler, vec2<f32>(h1.x, h1.y) / size, l, 0.0).rgb;
-    return g0.y * (g0.x * a + g1.x * b) + g1.y * (g0.x * c + g1.x * d);
-}
-
-fn lightmap_read(uv1: vec2<f32>, extra: u32) -> vec3<f32> {
-    if (frame.lightmap_mode & 3u) == 2u {
-        return lightmap_bicubic(uv1, extra);
-    }
-    return lightmap_bilinear(uv1, extra);
-}
-
-// The tangent frame of directional light-maps (lightlab_bake::gather::directional_frame).
-fn directional_frame(n: vec3<f32>) -> mat2x3<f32> {
-    let sign = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    return mat2x3<f32>(
-        vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        vec3<f32>(b, sign + n.y * n.y * a, -n.y),
-    );
-}
-
-// Weights of the three basis directions (Half-Life 2's radiosity normal mapping basis) for a
-// tangent-space normal, as lightlab_bake::gather::directional_weights.
-fn directional_weights(n: vec3<f32>) -> vec3<f32> {
-    let c = max(vec3<f32>(
-        dot(n, vec3<f32>(-0.4082483, 0.70710677, 0.57735026)),
-        dot(n, vec3<f32>(-0.4082483, -0.70710677, 0.57735026)),
-        dot(n, vec3<f32>(0.8164966, 0.0, 0.57735026)),
-    ), vec3<f32>(0.0));
-    let w = c * c;
-    let t = w.x + w.y + w.z;
-    if t > 0.0 {
-        return w / t;
-    }
-    return vec3<f32>(1.0 / 3.0);
-}
-
-// ---- light propagation volumes -----------------------------------------------------------------
-
-// The LPV's three colour SH read trilinearly at q in cascade c (the cascades are stacked along
-// z; reads clamp to the cascade's cell centres, as lightlab_core::lpv::Volume::sample).
-struct LpvSample {
-    r: vec4<f32>,
-    g: vec4<f32>,
-    b: vec4<f32>,
-}
-
-fn lpv_sample(q: vec3<f32>, c: u32) -> LpvSample {
-    let g = frame.lpv_grids[c];
-    let n = frame.lpv_size;
-    let f = clamp((q - g.xyz) / g.w, vec3<f32>(0.5), vec3<f32>(n - 0.5));
-    let uvw = (f + vec3<f32>(0.0, 0.0, f32(c) * n)) / vec3<f32>(n, n, n * f32(frame.lpv_cascades));
-    return LpvSample(
-        textureSampleLevel(lpv_r, lpv_sampler, uvw, 0.0),
-        textureSampleLevel(lpv_g, lpv_sampler, uvw, 0.0),
-        textureSampleLevel(lpv_b, lpv_sampler, uvw, 0.0),
-    );
-}
-
-// Kaplanyan's irradiance on normal n from cascade c read at q (lightlab_core::lpv::irradiance_of).
-fn lpv_read(q: vec3<f32>, n: vec3<f32>, c: u32) -> vec3<f32> {
-    let s = frame.lpv_grids[c].w;
-    let v = lpv_sample(q, c);
-    let m = -n;
-    let y = vec4<f32>(0.2820948, 0.4886025 * m.y, 0.4886025 * m.z, 0.4886025 * m.x);
-    let k = vec4<f32>(PI, 2.0 * PI / 3.0, 2.0 * PI / 3.0, 2.0 * PI / 3.0) * y / (s * s);
-    return max(vec3<f32>(dot(v.r, k), dot(v.g, k), dot(v.b, k)), vec3<f32>(0.0));
-}
-
-// Cascade c's damped irradiance (lightlab_core::lpv::Volume::irradiance_damped): read half a
-// cell along n and, with damping, keep the smaller of that and the read lpv_damping cells out.
-fn lpv_cascade_irradiance(p: vec3<f32>, n: vec3<f32>, c: u32) -> vec3<f32> {
-    let s = frame.lpv_grids[c].w;
-    let q = p + 0.5 * s * n;
-    let e = lpv_read(q, n, c);
-    if frame.lpv_damping > 0.0 {
-        return min(e, lpv_read(q + frame.lpv_damping * s * n, n, c));
-    }
-    return e;
-}
-
-// Indirect irradiance E from the LPV at a surface. Kaplanyan: the finest cascade holding p
-// (2 + damping) cells inside, blended over 2 cells towards its edge with the next coarser
-// (lightlab_core::lpv::cascade_weight). WPI (lpv-faithful): the SH evaluated at −n just off
-// the surface, as the report's compositor.
-fn lpv_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    if frame.lpv_mode == 2u {
-        let q = p + 0.001 * frame.lpv_grids[0].w * frame.lpv_size * n;
-        let v = lpv_sample(q, 0u);
-        let m = -n;
-        let y = vec4<f32>(0.2820948, 0.4886025 * m.y, 0.4886025 * m.z, 0.4886025 * m.x);
-        return max(vec3<f32>(dot(v.r, y), dot(v.g, y), dot(v.b, y)), vec3<f32>(0.0));
-    }
-    let last = frame.lpv_cascades - 1u;
-    let border = 2.0 + frame.lpv_damping;
-    var c = last;
-    var w = 1.0;
-    for (var k = 0u; k < last; k++) {
-        let g = frame.lpv_grids[k];
-        let f = (p - g.xyz) / g.w;
-        let d = min(min(f.x, min(f.y, f.z)), frame.lpv_size - max(f.x, max(f.y, f.z)));
-        if d > border {
-            c = k;
-            w = min((d - border) / 2.0, 1.0);
-            break;
-        }
-    }
-    let e = lpv_cascade_irradiance(p, n, c);
-    if w < 1.0 {
-        return w * e + (1.0 - w) * lpv_cascade_irradiance(p, n, c + 1u);
-    }
-    return e;
-}
-
-// Everything but the per-light passes: ambient and emission (only the LPV's indirect light in
-// the indirect-only view).
+// The radiance a fragment gets besides the per-light passes: the ambient source's term and
+// emission (`source_radiance`, defined by the ambient source compiled after this file).
 fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
-    if frame.lpv_mode != 0u {
-        // Thin foliage (diffuse transmission t): 1 − t of the light arriving on the front is
-        // reflected, t of the light arriving on the back leaves through the front.
-        var e = lpv_irradiance(s.p, s.n);
-        if s.transmission > 0.0 {
-            e = (1.0 - s.transmission) * e + s.transmission * lpv_irradiance(s.p, -s.n);
-        }
-        let indirect = s.diffuse / PI * e;
-        if frame.lpv_indirect_only == 1u {
-            return indirect;
-        }
-        return indirect + ambient(s, in, nv) + emission(in);
-    }
-    return ambient(s, in, nv) + emission(in);
+    return source_radiance(s, in, nv);
 }
 
-// `nv`: the interpolated vertex normal (before the normal map), turned like s.n.
-fn ambient(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
-    let uv1 = in.uv1;
-    if frame.sh_mode != 0u {
-        return s.diffuse * max(sh_ambient(in), vec3<f32>(0.0));
-    }
-    // Fuchs §3.4: diffuse × light-map (the light-map holds E/π).
-    if (frame.lightmap_mode & 3u) != 0u {
-        var e = lightmap_read(uv1, 0u);
-        if (frame.lightmap_mode & 4u) != 0u {
-            let r = lightmap_read(uv1, frame.lightmap_pages);
-            let f = directional_frame(nv);
-            let nl = vec3<f32>(dot(s.n, f[0]), dot(s.n, f[1]), dot(s.n, nv));
-            e *= max(dot(directional_weights(nl), r), 0.0);
-        }
-        return s.diffuse * max(e, vec3<f32>(0.0));
-    }
+// The environment's unshadowed SH irradiance (frame.ambient_sh) on the diffuse surface.
+fn sky_ambient(s: Surface) -> vec3<f32> {
     let y = sh9(s.n);
     var e = vec3<f32>(0.0);
     for (var k = 0u; k < 9u; k++) {

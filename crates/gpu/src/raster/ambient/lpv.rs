@@ -1,0 +1,75 @@
+//! The volume source: the light propagation volume (recomputed every frame by its pre-passes)
+//! read trilinearly from its three 3D textures.
+
+use super::super::bindings::entry;
+use crate::GpuContext;
+use crate::lpv::{Lpv, LpvScheme};
+use crate::uniforms::LpvAmbientUniforms;
+use wgpu::BindingResource as R;
+use wgpu::util::DeviceExt;
+
+pub(in crate::raster) struct LpvSource {
+    pub volume: Lpv,
+    pub indirect_only: bool,
+    uniforms: wgpu::Buffer,
+    views: Vec<wgpu::TextureView>,
+    sampler: wgpu::Sampler,
+}
+
+impl LpvSource {
+    pub fn new(ctx: &GpuContext, volume: Lpv, indirect_only: bool) -> LpvSource {
+        let mut u = LpvAmbientUniforms {
+            mode: match volume.settings.scheme {
+                LpvScheme::Kaplanyan => 1,
+                LpvScheme::Wpi => 2,
+            },
+            size: volume.grids[0].n as f32,
+            indirect_only: indirect_only as u32,
+            damping: match volume.settings.scheme {
+                LpvScheme::Kaplanyan => volume.settings.damping,
+                LpvScheme::Wpi => 0.0,
+            },
+            cascades: volume.grids.len() as u32,
+            grids: [[0.0, 0.0, 0.0, 1.0]; 4],
+            ..Default::default()
+        };
+        for (k, grid) in volume.grids.iter().enumerate() {
+            u.grids[k] = grid.origin.extend(grid.cell).to_array();
+        }
+        let uniforms = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("lpv ambient uniforms"),
+                contents: bytemuck::bytes_of(&u),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let views = volume
+            .textures
+            .iter()
+            .map(|t| t.create_view(&Default::default()))
+            .collect();
+        let sampler = ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("lpv"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        LpvSource {
+            volume,
+            indirect_only,
+            uniforms,
+            views,
+            sampler,
+        }
+    }
+
+    pub fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
+        vec![
+            entry(3, self.uniforms.as_entire_binding()),
+            entry(4, R::TextureView(&self.views[0])),
+            entry(5, R::TextureView(&self.views[1])),
+            entry(6, R::TextureView(&self.views[2])),
+            entry(7, R::Sampler(&self.sampler)),
+        ]
+    }
+}
