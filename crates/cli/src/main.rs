@@ -7,6 +7,8 @@
 //! `technique` (the registry of techniques), `techniques` (the one factory of GPU renderers,
 //! by family), `options` (the option groups and their library settings), `progress`.
 
+#[cfg(test)]
+mod acceptance;
 mod bake_cmd;
 mod bench;
 mod demo;

@@ -26,7 +26,7 @@ pub enum Technique {
 }
 
 /// What builds a technique's image, and so which options it reads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Family {
     /// The CPU path tracer (`reference`, `direct`).
     PathTraced,
