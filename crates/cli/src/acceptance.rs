@@ -30,6 +30,8 @@ enum Reference {
     Bounces(u32),
     /// Exactly one bounce before the surface seen (indirect light only).
     OneBounceOnly,
+    /// The shading normal of the first hit as n/2 + ½ (ray cast, 4×4 samples per pixel).
+    Normals,
 }
 
 struct Row {
@@ -40,6 +42,8 @@ struct Row {
     /// The row's options besides the common ones (physical fall-off, 2×2 supersampling).
     options: fn(&mut TechniqueArgs),
 }
+
+fn keep(_: &mut TechniqueArgs) {}
 
 fn no_ambient(a: &mut TechniqueArgs) {
     a.raster.ambient = Ambient::None;
@@ -97,17 +101,53 @@ const ROWS: &[Row] = {
         // setting for lpv and the report's for lpv-faithful.
         Row { technique: T::Lpv, scene: "cornell", reference: OneBounceOnly, budget: 0.015, options: lpv_indirect },
         Row { technique: T::LpvFaithful, scene: "cornell", reference: OneBounceOnly, budget: 0.35, options: faithful_indirect },
+        Row { technique: T::Normals, scene: "prt", reference: Normals, budget: 0.01, options: keep },
     ]
 };
 
+/// The shading normals of the first hits, turned to the viewer as the rasteriser turns them,
+/// as n/2 + ½ (black where no surface is hit), averaged over 4×4 samples per pixel.
+fn normals(scene: &Scene, accel: &Accel) -> Image {
+    let cam = scene.default_camera().expect("a camera");
+    let mut img = Image::new(N, N);
+    for y in 0..N {
+        for x in 0..N {
+            let mut sum = glam::Vec3::ZERO;
+            for k in 0..16 {
+                let (sx, sy) = ((k % 4) as f32 + 0.5, (k / 4) as f32 + 0.5);
+                let ndc = glam::Vec2::new(
+                    (x as f32 + sx / 4.0) / N as f32 * 2.0 - 1.0,
+                    1.0 - (y as f32 + sy / 4.0) / N as f32 * 2.0,
+                );
+                let d = cam.ray_direction(ndc, 1.0);
+                let Some(h) = accel.intersect(cam.position(), d, f32::INFINITY) else {
+                    continue;
+                };
+                let sf = lightlab_trace::render::surface(scene, accel, &h);
+                let (mut n, mut ng) = (sf.ns, sf.ng);
+                if ng.dot(d) > 0.0 {
+                    (n, ng) = (-n, -ng);
+                }
+                if n.dot(d) > 0.0 {
+                    n = (n - ng * (n.dot(ng) - 1e-3)).normalize();
+                }
+                sum += 0.5 * n + glam::Vec3::splat(0.5);
+            }
+            img.data[(y * N + x) as usize] = sum / 16.0;
+        }
+    }
+    img
+}
+
 /// The path tracer's image of `scene` for a kind of reference.
 fn reference(scene: &Scene, kind: Reference) -> Image {
+    let accel = Accel::new(scene);
     let (min_depth, max_depth, spp) = match kind {
         Reference::Direct => (0, 1, 256),
         Reference::Bounces(k) => (0, k + 1, 512),
         Reference::OneBounceOnly => (2, 2, 1024),
+        Reference::Normals => return normals(scene, &accel),
     };
-    let accel = Accel::new(scene);
     let settings = RenderSettings {
         width: N,
         height: N,

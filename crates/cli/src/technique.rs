@@ -23,6 +23,7 @@ pub enum Technique {
     ShlNormalmapped,
     Lpv,
     LpvFaithful,
+    Normals,
 }
 
 /// What builds a technique's image, and so which options it reads.
@@ -38,6 +39,8 @@ pub enum Family {
     Sh,
     /// Shadow-mapped direct light plus a light propagation volume, every frame.
     Lpv,
+    /// Views of the geometry for debugging, not lighting.
+    Debug,
 }
 
 /// One technique: its name on the command line, its family and a line about it.
@@ -82,6 +85,7 @@ pub const REGISTRY: &[Entry] = {
         entry(T::ShlNormalmapped, "shl-normalmapped", F::Sh, "normal-mapped SH light-maps (Fuchs §5.7)"),
         entry(T::Lpv, "lpv", F::Lpv, "light propagation volumes (Kaplanyan & Dachsbacher)"),
         entry(T::LpvFaithful, "lpv-faithful", F::Lpv, "light propagation volumes as the WPI report"),
+        entry(T::Normals, "normals", F::Debug, "shading normals as colours, n/2 + 1/2 (debug view)"),
     ]
 };
 
@@ -150,7 +154,7 @@ impl Technique {
             (T::PhongShadowMaps | T::Lpv | T::LpvFaithful, None | Some(V::Depth)) => S::Map,
             (T::PhongShadowMaps | T::Lpv | T::LpvFaithful, Some(V::Linear)) => S::MapLinear,
             (T::PhongShadowMaps | T::Lpv | T::LpvFaithful, Some(V::Planar)) => S::Planar,
-            (T::Lightmap, None) => S::None,
+            (T::Lightmap | T::Normals, None) => S::None,
             (t, None) if t.family() == Family::Sh => S::None,
             (t, Some(v)) => bail!("--shadow-variant {v:?} does not apply to technique '{t}'"),
             (t, None) => bail!("'{t}' is not a GPU technique"),
@@ -174,13 +178,16 @@ impl Technique {
         if !self.is_gpu() {
             return Ok(());
         }
-        if a.bake.bounces.is_some() && matches!(family, Family::Phong | Family::Lpv) {
+        if a.bake.bounces.is_some() && matches!(family, Family::Phong | Family::Lpv | Family::Debug)
+        {
             bail!("--bounces applies to --technique reference and to baked techniques, not {self}");
         }
         if a.lpv.debug_view != DebugView::Final && family != Family::Lpv {
             bail!("--debug-view applies to the LPV techniques (lpv, lpv-faithful)");
         }
-        if a.raster.no_area_lights && matches!(family, Family::Lightmap | Family::Sh) {
+        if a.raster.no_area_lights
+            && matches!(family, Family::Lightmap | Family::Sh | Family::Debug)
+        {
             bail!(
                 "--no-area-lights applies to the Phong and LPV techniques; {self} never lights \
                  with emitters as area lights (its bake holds their light)"

@@ -90,25 +90,15 @@ fn struct_problem(source: &str, name: &str, rust: &RustLayout) -> Result<(), Str
 }
 
 /// Every WGSL file of the crate, for validation.
-pub fn all_shaders() -> Vec<(&'static str, &'static str)> {
-    vec![
+pub fn all_shaders() -> Vec<(String, &'static str)> {
+    let rasters = crate::raster::SourceKind::ALL.map(|k| {
+        (
+            format!("common.wgsl + raster.wgsl + ambient source {k:?}"),
+            crate::raster::shader_source(k),
+        )
+    });
+    let others = [
         ("common.wgsl", crate::uniforms::COMMON_WGSL),
-        (
-            "common.wgsl + raster.wgsl + ambient_sky.wgsl",
-            crate::raster::shader_source(crate::raster::SourceKind::Sky),
-        ),
-        (
-            "common.wgsl + raster.wgsl + ambient_lightmap.wgsl",
-            crate::raster::shader_source(crate::raster::SourceKind::Lightmap),
-        ),
-        (
-            "common.wgsl + raster.wgsl + ambient_sh.wgsl",
-            crate::raster::shader_source(crate::raster::SourceKind::Sh),
-        ),
-        (
-            "common.wgsl + raster.wgsl + ambient_lpv.wgsl",
-            crate::raster::shader_source(crate::raster::SourceKind::Lpv),
-        ),
         (
             "common.wgsl + prt_relit.wgsl",
             crate::prt::RELIT_SOURCE.as_str(),
@@ -117,7 +107,12 @@ pub fn all_shaders() -> Vec<(&'static str, &'static str)> {
             "common.wgsl + material.wgsl + lpv.wgsl",
             crate::lpv::LPV_SOURCE.as_str(),
         ),
-    ]
+    ];
+    others
+        .into_iter()
+        .map(|(n, s)| (n.to_string(), s))
+        .chain(rasters)
+        .collect()
 }
 
 #[cfg(test)]

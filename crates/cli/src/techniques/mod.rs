@@ -6,6 +6,7 @@
 
 pub mod lightmap;
 mod lpv;
+mod normals;
 pub mod sh;
 
 use crate::options::{DebugView, TechniqueArgs};
@@ -81,6 +82,7 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
             r
         }
         Family::Lpv => lpv::renderer(ctx, req)?,
+        Family::Debug => normals::renderer(ctx, req)?,
     };
     Ok(TechniqueRenderer {
         technique: req.technique,

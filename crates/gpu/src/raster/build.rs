@@ -29,6 +29,8 @@ pub(super) enum AmbientInput<'a> {
     Sh(&'a ShInput<'a>),
     /// The volume's settings, and whether to render its indirect light alone.
     Lpv(&'a LpvSettings, bool),
+    /// The shading normals, unlit.
+    Normals,
 }
 
 impl<'a> AmbientInput<'a> {
@@ -287,6 +289,7 @@ impl Renderer {
         let gscene = GpuScene::with_lightmap_uvs(device, &ctx.queue, scene, rects.as_deref());
         let source = match ambient {
             AmbientInput::None => AmbientSource::Sky,
+            AmbientInput::Normals => AmbientSource::Normals,
             AmbientInput::Lightmap(lm) => AmbientSource::lightmap(ctx, lm, page_size),
             AmbientInput::Sh(sh) => AmbientSource::sh(ctx, sh, scene.instances.len(), page_size),
             AmbientInput::Lpv(l, indirect_only) => {

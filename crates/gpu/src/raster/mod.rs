@@ -151,6 +151,23 @@ impl Renderer {
         Self::build(ctx, scene, settings, AmbientInput::Lpv(lpv, indirect_only))
     }
 
+    /// A renderer that shows the shading normals (after normal maps, turned to the viewer) as
+    /// n/2 + ½, unlit: the `normals` debug technique. The scene's lights are not drawn.
+    pub fn normals(
+        ctx: &GpuContext,
+        scene: &Scene,
+        settings: RasterSettings,
+    ) -> Result<Renderer, RasterError> {
+        let mut unlit = scene.clone();
+        unlit.lights.clear();
+        let settings = RasterSettings {
+            shadows: ShadowMethod::None,
+            area_lights: false,
+            ..settings
+        };
+        Self::build(ctx, &unlit, settings, AmbientInput::Normals)
+    }
+
     /// The light propagation volume, if this renderer has one.
     pub fn lpv(&self) -> Option<&crate::lpv::Lpv> {
         self.ambient.volume()

@@ -5,7 +5,8 @@
 //!   techniques;
 //! - `Lightmap`: diffuse × light-map (Fuchs §3.4), `lightmap`;
 //! - `Sh`: diffuse × SH transfer · SH light (the PRT techniques, `crate::prt`);
-//! - `Lpv`: the light propagation volume's indirect light plus the sky (`crate::lpv`).
+//! - `Lpv`: the light propagation volume's indirect light plus the sky (`crate::lpv`);
+//! - `Normals`: the shading normal as a colour (the `normals` debug technique).
 
 mod lightmap;
 mod lpv;
@@ -30,14 +31,16 @@ pub enum SourceKind {
     Lightmap,
     Sh,
     Lpv,
+    Normals,
 }
 
 impl SourceKind {
-    pub const ALL: [SourceKind; 4] = [
+    pub const ALL: [SourceKind; 5] = [
         SourceKind::Sky,
         SourceKind::Lightmap,
         SourceKind::Sh,
         SourceKind::Lpv,
+        SourceKind::Normals,
     ];
 
     /// The source's WGSL (compiled after raster.wgsl).
@@ -47,6 +50,7 @@ impl SourceKind {
             SourceKind::Lightmap => include_str!("../../shaders/ambient_lightmap.wgsl"),
             SourceKind::Sh => include_str!("../../shaders/ambient_sh.wgsl"),
             SourceKind::Lpv => include_str!("../../shaders/ambient_lpv.wgsl"),
+            SourceKind::Normals => include_str!("../../shaders/ambient_normals.wgsl"),
         }
     }
 
@@ -55,7 +59,7 @@ impl SourceKind {
         use wgpu::BufferBindingType::Uniform;
         use wgpu::SamplerBindingType::Filtering;
         match self {
-            SourceKind::Sky => vec![],
+            SourceKind::Sky | SourceKind::Normals => vec![],
             SourceKind::Lightmap => vec![
                 buffer(3, Uniform, false),
                 filtered_texture(4, Dim::D2Array),
@@ -87,6 +91,7 @@ pub(super) enum AmbientSource {
     Lightmap(lightmap::LightmapSource),
     Sh(Box<ShResources>),
     Lpv(Box<lpv::LpvSource>),
+    Normals,
 }
 
 impl AmbientSource {
@@ -113,13 +118,14 @@ impl AmbientSource {
             AmbientSource::Lightmap(_) => SourceKind::Lightmap,
             AmbientSource::Sh(_) => SourceKind::Sh,
             AmbientSource::Lpv(_) => SourceKind::Lpv,
+            AmbientSource::Normals => SourceKind::Normals,
         }
     }
 
     /// Group 2's entries from binding 3 on.
     pub fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
         match self {
-            AmbientSource::Sky => vec![],
+            AmbientSource::Sky | AmbientSource::Normals => vec![],
             AmbientSource::Lightmap(l) => l.entries(),
             AmbientSource::Sh(s) => s.entries(),
             AmbientSource::Lpv(l) => l.entries(),
