@@ -62,9 +62,9 @@ pub struct RasterArgs {
     /// forward (one scene pass per light) or deferred (G-buffer, one screen pass per light).
     #[arg(long, default_value = "forward")]
     pub path: RenderPath,
-    /// Attenuation of point and spot lights: inverse-square (physical, as the reference) or
-    /// Fuchs's fuchs1..fuchs4 (fuchs4 = 1 − (d/r)², the thesis's choice).
-    #[arg(long, default_value = "fuchs4")]
+    /// Attenuation of point and spot lights: inverse-square (physical, as the reference: the
+    /// default) or Fuchs's fuchs1..fuchs4 (fuchs4 = 1 − (d/r)², the thesis's choice).
+    #[arg(long, default_value = "inverse-square")]
     pub attenuation: Attenuation,
     /// Radius r of the Fuchs attenuation functions (default: the glTF range, else
     /// √(I/0.05 lx)).
@@ -110,7 +110,7 @@ impl Default for RasterArgs {
             wind: 0.0,
             wind_time: 0.0,
             path: RenderPath::Forward,
-            attenuation: Attenuation::Fuchs4,
+            attenuation: Attenuation::InverseSquare,
             light_radius: None,
             brdf: None,
             shadow_variant: None,

@@ -134,7 +134,7 @@ impl Default for RasterSettings {
             camera: 0,
             path: RenderPath::Forward,
             shadows: ShadowMethod::VolumesZFail,
-            attenuation: Attenuation::Fuchs4,
+            attenuation: Attenuation::InverseSquare,
             light_radius: None,
             ambient: Ambient::Environment,
             shadow_size: 2048,
