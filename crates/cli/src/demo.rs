@@ -158,7 +158,10 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                     )),
                 });
             }
-            eprintln!("{name}: {} bakes shared by its techniques", bakes.len());
+            eprintln!(
+                "{name}: {} bake(s) made, shared by its techniques",
+                bakes.len()
+            );
         }
     }
     let total = start.elapsed().as_secs_f64();

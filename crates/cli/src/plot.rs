@@ -85,20 +85,37 @@ pub fn error_cost_svg(points: &[Point]) -> String {
         TOP + ph / 2.0,
         TOP + ph / 2.0
     );
+    let mut placed: Vec<(f64, f64, f64)> = vec![];
     for p in pts {
         let (px, py) = (x(p.cost_ms), y(p.relmse));
         let colour = if p.gpu { "#1f5fbf" } else { "#c0392b" };
+        let (lx, ly) = label_place(&mut placed, px + 6.0, py + 4.0, p.label.chars().count());
         s += &format!(
             "<circle cx=\"{px:.1}\" cy=\"{py:.1}\" r=\"4\" fill=\"{colour}\"><title>{l}: {c:.3} ms, relMSE {e:.5}</title></circle>\
-             <text x=\"{:.1}\" y=\"{:.1}\">{l}</text>",
-            px + 6.0,
-            py + 4.0,
+             <text x=\"{lx:.1}\" y=\"{ly:.1}\">{l}</text>",
             l = escape(&p.label),
             c = p.cost_ms,
             e = p.relmse
         );
     }
     s + "</svg>"
+}
+
+/// Where a label of `chars` characters goes near (x, y): the first of y, y ± 12, y ± 24, …
+/// whose box overlaps no label placed so far (boxes as (x, baseline y, width)).
+fn label_place(placed: &mut Vec<(f64, f64, f64)>, x: f64, y: f64, chars: usize) -> (f64, f64) {
+    let w = 6.5 * chars as f64;
+    let clear = |y: f64| {
+        placed
+            .iter()
+            .all(|&(px, py, pw)| (py - y).abs() >= 12.0 || x + w <= px || px + pw <= x)
+    };
+    let y = (0..12)
+        .map(|k| y + 12.0 * ((k + 1) / 2) as f64 * if k % 2 == 1 { 1.0 } else { -1.0 })
+        .find(|&y| clear(y))
+        .unwrap_or(y);
+    placed.push((x, y, w));
+    (x, y)
 }
 
 /// 10^d as a short label.
