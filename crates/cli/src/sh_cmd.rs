@@ -66,13 +66,15 @@ fn load(args: &EnvArgs) -> Result<(Image, EnvFormat)> {
         FormatArg::CubeStrip => EnvFormat::CubeStrip,
         FormatArg::Auto => EnvFormat::guess(img.width, img.height).with_context(|| {
             format!(
-                "{}: cannot tell the layout of a {}×{} image (2:1 is lat-long, 1:1 angular, 6:1 a cube strip); pass --format",
+                "{}: cannot tell the layout of a {}×{} image (2:1 is lat-long, 1:1 angular from 8×8, 6:1 a cube strip); pass --format",
                 env.display(),
                 img.width,
                 img.height
             )
         })?,
     };
+    f.check(img.width, img.height)
+        .with_context(|| format!("{} as --format {:?}", env.display(), format))?;
     Ok((img, f))
 }
 

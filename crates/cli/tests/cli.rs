@@ -375,6 +375,25 @@ fn sh_project_and_irradiance() {
     let bad = lightlab(&["sh", "project", "--env", odd.to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(1));
     assert!(stderr(&bad).contains("--format"), "{}", stderr(&bad));
+    // Maps that do not fit the layout asked for are refused, not indexed out of bounds
+    // (a 30×7 cube strip panicked), and a 1×1 image is not taken as an angular map.
+    for (args, needle) in [
+        (vec!["--format", "cube-strip"], "not a cube strip"),
+        (vec!["--format", "angular"], "not an angular map"),
+    ] {
+        let mut a = vec!["sh", "project", "--env", odd.to_str().unwrap()];
+        a.extend(args);
+        let bad = lightlab(&a);
+        assert_eq!(bad.status.code(), Some(1), "{a:?}");
+        assert!(stderr(&bad).contains(needle), "{}", stderr(&bad));
+    }
+    let tiny = dir.path().join("tiny.exr");
+    lightlab_core::image::Image::new(1, 1)
+        .write(&tiny, Default::default())
+        .unwrap();
+    let bad = lightlab(&["sh", "project", "--env", tiny.to_str().unwrap()]);
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(stderr(&bad).contains("--format"), "{}", stderr(&bad));
 }
 
 /// The GPU techniques through the command line (lavapipe in CI; skipped locally without an

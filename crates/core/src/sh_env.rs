@@ -31,17 +31,49 @@ pub enum EnvFormat {
     CubeStrip,
 }
 
+/// An image that cannot be an environment map of the layout it was given.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum EnvError {
+    #[error("a {width}×{height} image is not a cube strip (six square faces side by side: 6:1)")]
+    NotCubeStrip { width: u32, height: u32 },
+    #[error(
+        "a {width}×{height} image is not an angular map (square, at least {MIN_ANGULAR}×{MIN_ANGULAR}: \
+         smaller discs have no usable solid angles)"
+    )]
+    NotAngular { width: u32, height: u32 },
+    #[error("an environment map needs at least one texel")]
+    Empty,
+}
+
+/// The smallest angular map whose centre-sample solid angles sum to within 5 % of 4π.
+pub const MIN_ANGULAR: u32 = 8;
+
 impl EnvFormat {
-    /// Guess from the aspect ratio: 2:1 is lat-long, 1:1 angular.
+    /// Guess from the aspect ratio: 2:1 is lat-long, 1:1 angular (from 8×8), 6:1 a cube strip.
     pub fn guess(width: u32, height: u32) -> Option<EnvFormat> {
-        if width == 2 * height {
-            Some(EnvFormat::LatLong)
+        let f = if width == 2 * height {
+            EnvFormat::LatLong
         } else if width == height {
-            Some(EnvFormat::Angular)
+            EnvFormat::Angular
         } else if width == 6 * height {
-            Some(EnvFormat::CubeStrip)
+            EnvFormat::CubeStrip
         } else {
-            None
+            return None;
+        };
+        f.check(width, height).ok().map(|()| f)
+    }
+
+    /// Whether a `width`×`height` image can be a map of this layout.
+    pub fn check(self, width: u32, height: u32) -> Result<(), EnvError> {
+        if width == 0 || height == 0 {
+            return Err(EnvError::Empty);
+        }
+        match self {
+            EnvFormat::LatLong => Ok(()),
+            EnvFormat::CubeStrip if width == 6 * height => Ok(()),
+            EnvFormat::CubeStrip => Err(EnvError::NotCubeStrip { width, height }),
+            EnvFormat::Angular if width == height && width >= MIN_ANGULAR => Ok(()),
+            EnvFormat::Angular => Err(EnvError::NotAngular { width, height }),
         }
     }
 }
@@ -60,8 +92,12 @@ pub fn latlong_uv_to_dir(uv: Vec2) -> Vec3 {
 }
 
 /// Visit every texel of an environment image with its direction and solid angle. Directions
-/// come from `param::Param`, the one owner of each mapping.
+/// come from `param::Param`, the one owner of each mapping. An image that does not fit the
+/// layout (`EnvFormat::check`) has no texels to visit.
 pub fn for_each_texel(img: &Image, format: EnvFormat, mut f: impl FnMut(DVec3, f64, Vec3)) {
+    if format.check(img.width, img.height).is_err() {
+        return;
+    }
     let (w, h) = (img.width as usize, img.height as usize);
     let centre = |x: usize, y: usize, w: usize, h: usize| {
         DVec2::new((x as f64 + 0.5) / w as f64, (y as f64 + 0.5) / h as f64)
@@ -155,4 +191,51 @@ pub fn irradiance_map(radiance: &[DVec3], width: u32) -> Image {
         let v: DVec3 = e.iter().zip(&y).map(|(c, b)| *c * *b).sum();
         v.as_vec3()
     })
+}
+
+#[cfg(test)]
+mod small_map_tests {
+    use super::*;
+
+    /// Every (size, format) either is refused by `check` or projects a constant map to its
+    /// exact L00 = √(4π) within 5 %: no panic on small or mis-shaped images.
+    #[test]
+    fn small_and_misshaped_maps_are_refused_or_project_correctly() {
+        let sizes = [
+            (1, 1),
+            (2, 1),
+            (3, 1),
+            (6, 1),
+            (4, 4),
+            (8, 8),
+            (12, 2),
+            (7, 5),
+            (64, 32),
+            (96, 16),
+        ];
+        let formats = [EnvFormat::LatLong, EnvFormat::Angular, EnvFormat::CubeStrip];
+        let mut accepted = 0;
+        for (w, h) in sizes {
+            let img = Image::from_fn(w, h, |_, _| Vec3::ONE);
+            for f in formats {
+                let ok = f.check(w, h);
+                let c = std::panic::catch_unwind(|| project_env(&img, f, 2));
+                let Ok(()) = ok else {
+                    continue;
+                };
+                accepted += 1;
+                let c = c.unwrap_or_else(|_| panic!("{w}×{h} {f:?} panicked"));
+                let want = (4.0 * PI).sqrt();
+                let got = c[0].x;
+                assert!(
+                    (got / want - 1.0).abs() < 0.05,
+                    "{w}×{h} {f:?}: L00 {got} vs {want}"
+                );
+            }
+        }
+        assert!(accepted >= 5, "{accepted}");
+        assert!(EnvFormat::CubeStrip.check(12, 3).is_err());
+        assert!(EnvFormat::Angular.check(1, 1).is_err());
+        assert_eq!(EnvFormat::guess(1, 1), None);
+    }
 }
