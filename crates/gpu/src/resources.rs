@@ -117,46 +117,85 @@ pub fn upload_array(
     (view, sampler)
 }
 
-/// Copy a texture (tightly packed texels of `bpp` bytes) to the CPU. The texture needs
-/// `COPY_SRC` usage.
+/// The most bytes one readback copy stages: frames larger than this are read in bands of rows
+/// (wgpu's default buffer limit is 256 MiB; an 8192² Rgba16Float frame is 512 MiB).
+pub const READBACK_BAND_BYTES: u64 = 64 << 20;
+
+/// Copy a texture (tightly packed texels of `bpp` bytes, layers one after the other) to the
+/// CPU. The texture needs `COPY_SRC` usage. Large textures are copied in bands of rows.
 pub fn read_texture(
     ctx: &GpuContext,
     tex: &wgpu::Texture,
     bpp: u32,
 ) -> Result<Vec<u8>, ReadbackError> {
+    let limit = ctx.device.limits().max_buffer_size.min(READBACK_BAND_BYTES);
+    read_texture_in_bands(ctx, tex, bpp, limit)
+}
+
+/// [`read_texture`] with each copy staging at most `max_bytes` (at least one row).
+pub fn read_texture_in_bands(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    bpp: u32,
+    max_bytes: u64,
+) -> Result<Vec<u8>, ReadbackError> {
     let (w, h, layers) = (tex.width(), tex.height(), tex.depth_or_array_layers());
-    let row = (w * bpp).div_ceil(256) * 256;
+    let row = ((w * bpp).div_ceil(256) * 256) as u64;
+    let band = (max_bytes / row).clamp(1, h as u64) as u32;
     let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
-        size: (row * h * layers) as u64,
+        size: row * band as u64,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let mut enc = ctx.device.create_command_encoder(&Default::default());
-    enc.copy_texture_to_buffer(
-        tex.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buf,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        tex.size(),
-    );
-    ctx.queue.submit([enc.finish()]);
-    let slice = buf.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |_| {});
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| ReadbackError(e.to_string()))?;
-    let data = slice
-        .get_mapped_range()
-        .map_err(|e| ReadbackError(e.to_string()))?;
-    let mut out = Vec::with_capacity((w * h * layers * bpp) as usize);
-    for y in 0..h * layers {
-        out.extend_from_slice(&data[(y * row) as usize..][..(w * bpp) as usize]);
+    let mut out = Vec::with_capacity(w as usize * h as usize * layers as usize * bpp as usize);
+    for layer in 0..layers {
+        let mut y0 = 0;
+        while y0 < h {
+            let rows = band.min(h - y0);
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            enc.copy_texture_to_buffer(
+                wgpu::TexelCopyTextureInfo {
+                    texture: tex,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: y0,
+                        z: layer,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &buf,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row as u32),
+                        rows_per_image: Some(rows),
+                    },
+                },
+                wgpu::Extent3d {
+                    width: w,
+                    height: rows,
+                    depth_or_array_layers: 1,
+                },
+            );
+            ctx.queue.submit([enc.finish()]);
+            let slice = buf.slice(..row * rows as u64);
+            slice.map_async(wgpu::MapMode::Read, |_| {});
+            ctx.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| ReadbackError(e.to_string()))?;
+            {
+                let data = slice
+                    .get_mapped_range()
+                    .map_err(|e| ReadbackError(e.to_string()))?;
+                for y in 0..rows as usize {
+                    out.extend_from_slice(&data[y * row as usize..][..(w * bpp) as usize]);
+                }
+            }
+            buf.unmap();
+            y0 += rows;
+        }
     }
     Ok(out)
 }

@@ -68,3 +68,55 @@ fn compute_shader_round_trip() {
         assert_eq!(*v, (i * i) as u32);
     }
 }
+
+/// Reading a texture back in bands of rows (frames larger than one staging buffer) gives the
+/// same bytes as one copy, for a 2D array and a 3D texture, whatever the band size.
+#[test]
+fn banded_readback_equals_one_copy() {
+    let Some(ctx) = lightlab_gpu::test_context() else {
+        return;
+    };
+    use lightlab_gpu::resources::{read_texture, read_texture_in_bands};
+    for (dim, layers) in [
+        (wgpu::TextureDimension::D2, 3),
+        (wgpu::TextureDimension::D3, 4),
+    ] {
+        let (w, h) = (37u32, 29u32);
+        let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("banded"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: dim,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let data: Vec<u8> = (0..w * h * layers * 4)
+            .map(|i| (i * 7 % 251) as u8)
+            .collect();
+        ctx.queue.write_texture(
+            tex.as_image_copy(),
+            &data,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 4),
+                rows_per_image: Some(h),
+            },
+            tex.size(),
+        );
+        let whole = read_texture(&ctx, &tex, 4).unwrap();
+        assert_eq!(whole, data, "{dim:?}");
+        for max in [1, 256 * 3, 256 * 7 + 5, 1 << 20] {
+            assert_eq!(
+                read_texture_in_bands(&ctx, &tex, 4, max).unwrap(),
+                data,
+                "{dim:?} {max}"
+            );
+        }
+    }
+}

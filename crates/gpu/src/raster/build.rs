@@ -278,6 +278,14 @@ impl Renderer {
             sh.validate(scene)?;
         }
         s.validate()?;
+        let max = ctx.device.limits().max_texture_dimension_2d;
+        if s.width.max(s.height) > max || s.shadow_size > max {
+            return Err(RasterError::Settings(format!(
+                "a {}×{} frame (after supersampling) with {}² shadow maps exceeds the adapter's \
+                 largest texture, {max}²: lower --width/--height, --ssaa or --shadow-size",
+                s.width, s.height, s.shadow_size
+            )));
+        }
         let camera = scene
             .cameras
             .get(s.camera)
