@@ -12,6 +12,10 @@
 use crate::{LoadOptions, Scene, SceneError, model::LightKind};
 use std::path::Path;
 
+/// The largest world coordinate a scene may have [m]: far beyond any real scene, and far
+/// enough below f32's range that bounding boxes, their areas and ray intersections stay finite.
+pub const MAX_COORDINATE: f32 = 1e15;
+
 /// Validate (and where allowed, repair) a scene loaded from `path`.
 pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(), SceneError> {
     let geo = |mesh: &str, problem: String| SceneError::Geometry {
@@ -190,10 +194,31 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
                 "references a mesh that does not exist".into(),
             ));
         }
-        if !inst.transform.is_finite() || inst.transform.determinant().abs() < 1e-20 {
+        // In f64: an f32 determinant of a huge scale overflows to infinity and passes.
+        let det = inst.transform.as_dmat4().determinant();
+        if !inst.transform.is_finite() || !det.is_finite() || det.abs() < 1e-20 {
             return Err(content(
                 format!("node '{}'", inst.name),
                 "has a NaN, infinite or singular transform".into(),
+            ));
+        }
+        let mesh = &scene.meshes[inst.mesh];
+        let far = mesh
+            .positions
+            .iter()
+            .map(|p| inst.transform.transform_point3(*p).abs().max_element())
+            .fold(
+                0.0f32,
+                |a, b| if b.is_nan() { f32::INFINITY } else { a.max(b) },
+            );
+        if far > MAX_COORDINATE {
+            return Err(content(
+                format!("node '{}'", inst.name),
+                format!(
+                    "places mesh '{}' up to {far:.3e} m from the origin; world coordinates must stay \
+                     within ±{MAX_COORDINATE:.0e} m (beyond that the ray tracer's arithmetic overflows)",
+                    mesh.name
+                ),
             ));
         }
     }

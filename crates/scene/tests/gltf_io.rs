@@ -325,6 +325,33 @@ fn nan_positions_are_rejected() {
     load_err(&p);
 }
 
+/// World coordinates beyond ±1e15 m (a huge node scale, or huge positions) are refused at load
+/// instead of overflowing the BVH build; the scale's determinant is checked in f64.
+#[test]
+fn coordinates_too_far_from_the_origin_are_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, scale) in [("scale19", 1e19f32), ("scale30", 1e30)] {
+        let p = triangle_file(dir.path(), name, GOOD, true, |j| {
+            j["nodes"][0]["scale"] = serde_json::json!([scale, scale, scale]);
+        });
+        let msg = load_err(&p);
+        assert!(msg.contains("1e15") || msg.contains("singular"), "{msg}");
+    }
+    let p = triangle_file(
+        dir.path(),
+        "far",
+        [[0.0, 0.0, 0.0], [1e30, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        true,
+        |_| {},
+    );
+    assert!(load_err(&p).contains("1e15"));
+    // Large but sane: a kilometre-scale scene loads.
+    let p = triangle_file(dir.path(), "km", GOOD, true, |j| {
+        j["nodes"][0]["scale"] = serde_json::json!([1000.0, 1000.0, 1000.0]);
+    });
+    load(p.to_str().unwrap(), LoadOptions::default()).unwrap();
+}
+
 #[test]
 fn degenerate_triangles_are_rejected_or_dropped_on_request() {
     let dir = tempfile::tempdir().unwrap();
