@@ -274,6 +274,16 @@ pub fn read(dir: &Path, scene: &Scene) -> Result<Lightmaps, BakeError> {
             manifest.scene
         )));
     }
+    if manifest.pages.len() != layout.pages.len() {
+        return Err(io(
+            &path,
+            format!(
+                "lists {} pages, the layout has {}",
+                manifest.pages.len(),
+                layout.pages.len()
+            ),
+        ));
+    }
     let mut pages = vec![];
     for (k, name) in manifest.pages.iter().enumerate() {
         let p = dir.join(name);
@@ -286,9 +296,6 @@ pub fn read(dir: &Path, scene: &Scene) -> Result<Lightmaps, BakeError> {
             ));
         }
         pages.push(img);
-    }
-    if pages.len() != layout.pages.len() {
-        return Err(io(&path, "lists fewer pages than the layout has"));
     }
     let mut directional = vec![];
     for (k, name) in manifest.directional_pages.iter().enumerate() {

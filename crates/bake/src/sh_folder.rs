@@ -153,6 +153,12 @@ fn read_sh_and_manifest(
             format!("not an SH light-map folder ({} {})", m.format, m.version),
         ));
     }
+    if !(1..=8).contains(&m.bands) {
+        return Err(io_err(
+            &path,
+            format!("says {} SH bands; a bake has 1 to 8", m.bands),
+        ));
+    }
     let mut scene = scene.clone();
     let layout = crate::layout::unwrap_scene(&mut scene, &m.layout.settings)?;
     if layout.pages != m.layout.pages || layout.instances != m.layout.instances {

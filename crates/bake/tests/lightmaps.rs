@@ -320,6 +320,16 @@ fn baked_folder_round_trips_and_rejects_another_scene() {
         output::read(&dir.path().join("missing"), &scene),
         Err(BakeError::Io(_))
     ));
+    // A manifest listing more pages than the layout has is an error, not an index past the
+    // layout's pages (it panicked).
+    let path = dir.path().join(output::MANIFEST);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut j: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let first = j["pages"][0].clone();
+    j["pages"].as_array_mut().unwrap().push(first);
+    std::fs::write(&path, serde_json::to_string(&j).unwrap()).unwrap();
+    let e = output::read(dir.path(), &scene).unwrap_err().to_string();
+    assert!(e.contains("pages") && e.contains("manifest"), "{e}");
 }
 
 #[test]

@@ -414,6 +414,16 @@ fn sh_lightmap_folder_round_trips() {
     let e = lightlab_bake::sh_folder::read_sh_with_compressed(dir.path(), &scene).unwrap_err();
     assert!(e.to_string().contains("indices-0.bin"), "{e}");
     std::fs::write(&idx, &bytes).unwrap();
+    // A manifest with 0 bands is refused by name (it panicked the compressed reader and made
+    // `shl` blame `--sh-window-size`).
+    let mpath = dir.path().join(lightlab_bake::output::MANIFEST);
+    let text = std::fs::read_to_string(&mpath).unwrap();
+    let mut j: serde_json::Value = serde_json::from_str(&text).unwrap();
+    j["bands"] = serde_json::json!(0);
+    std::fs::write(&mpath, serde_json::to_string(&j).unwrap()).unwrap();
+    let e = lightlab_bake::sh_folder::read_sh_with_compressed(dir.path(), &scene).unwrap_err();
+    assert!(e.to_string().contains("0 SH bands"), "{e}");
+    std::fs::write(&mpath, &text).unwrap();
     assert_eq!(back.bands, 4);
     assert_eq!(back.layout, sl.layout);
     for (a, b) in back.pages.iter().flatten().zip(sl.pages.iter().flatten()) {
