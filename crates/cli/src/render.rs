@@ -106,6 +106,12 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if ext != "exr" && ext != "png" {
         bail!("{}: the output must be .exr or .png", a.output.display());
     }
+    // Checked before any work: NaN, infinite or negative exposure gave a black PNG.
+    anyhow::ensure!(
+        a.exposure.is_finite() && a.exposure > 0.0,
+        "--exposure must be a positive number, not {}",
+        a.exposure
+    );
     let mut scene = load_scene(&a.scene, a.drop_degenerate)?;
     if let Some(env) = &a.env {
         anyhow::ensure!(

@@ -168,6 +168,18 @@ fn bad_render_requests_fail_with_clear_errors_and_no_output() {
         &out,
         "no camera 3",
     );
+    for bad in [
+        "--exposure=NaN",
+        "--exposure=inf",
+        "--exposure=-1",
+        "--exposure=0",
+    ] {
+        assert_fails_cleanly(
+            &["render", "--scene", "cornell", bad, "-o", o],
+            &out,
+            "--exposure must be a positive number",
+        );
+    }
     let bmp = dir.path().join("x.bmp");
     assert_fails_cleanly(
         &["render", "--scene", "cornell", "-o", bmp.to_str().unwrap()],
