@@ -28,6 +28,9 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The extensions lightlab reads; files that *require* any other are rejected.
+/// The deepest node hierarchy lightlab loads (real files nest a few dozen levels).
+pub const MAX_NODE_DEPTH: usize = 1024;
+
 pub const SUPPORTED_EXTENSIONS: [&str; 4] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
@@ -187,9 +190,7 @@ impl Importer<'_> {
             .default_scene()
             .or_else(|| self.doc.scenes().next())
             .ok_or_else(|| gltf_err(self.path, "the file contains no scene"))?;
-        for node in gscene.nodes() {
-            self.node(&node, Mat4::IDENTITY, default_material)?;
-        }
+        self.nodes(&gscene, default_material)?;
         self.detail_sources(default_material)?;
         if self
             .scene
@@ -373,12 +374,13 @@ impl Importer<'_> {
         })
     }
 
+    /// One node's meshes, camera and light under `parent`; returns its world transform.
     fn node(
         &mut self,
         node: &gltf::Node,
         parent: Mat4,
         default_material: usize,
-    ) -> Result<(), SceneError> {
+    ) -> Result<Mat4, SceneError> {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         let node_name = node
             .name()
@@ -450,8 +452,40 @@ impl Importer<'_> {
                 range: light.range(),
             });
         }
-        for child in node.children() {
-            self.node(&child, world, default_material)?;
+        Ok(world)
+    }
+
+    /// Every node of the scene, depth first without recursion: a node reached twice (a cycle,
+    /// or a node with two parents, both invalid glTF) or deeper than [`MAX_NODE_DEPTH`] is an
+    /// error rather than a stack overflow.
+    fn nodes(&mut self, scene: &gltf::Scene, default_material: usize) -> Result<(), SceneError> {
+        let mut seen = vec![false; self.doc.nodes().len()];
+        let mut stack: Vec<(gltf::Node, Mat4, usize)> =
+            scene.nodes().map(|n| (n, Mat4::IDENTITY, 1)).collect();
+        stack.reverse();
+        while let Some((node, parent, depth)) = stack.pop() {
+            let what = || format!("node {} ('{}')", node.index(), node.name().unwrap_or(""));
+            if std::mem::replace(&mut seen[node.index()], true) {
+                return Err(SceneError::Content {
+                    path: self.path.into(),
+                    what: what(),
+                    problem: "is reached twice: the node hierarchy has a cycle or a node with \
+                              two parents"
+                        .into(),
+                });
+            }
+            if depth > MAX_NODE_DEPTH {
+                return Err(SceneError::Content {
+                    path: self.path.into(),
+                    what: what(),
+                    problem: format!("lies deeper than {MAX_NODE_DEPTH} levels of nodes"),
+                });
+            }
+            let world = self.node(&node, parent, default_material)?;
+            let children: Vec<_> = node.children().collect();
+            for child in children.into_iter().rev() {
+                stack.push((child, world, depth + 1));
+            }
         }
         Ok(())
     }

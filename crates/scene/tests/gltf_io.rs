@@ -325,6 +325,57 @@ fn nan_positions_are_rejected() {
     load_err(&p);
 }
 
+/// Node cycles, self-cycles and very deep chains are errors naming the node, not stack
+/// overflows (exit 134).
+#[test]
+fn node_cycles_and_deep_chains_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let chain = |n: usize| -> Vec<serde_json::Value> {
+        (0..n)
+            .map(|i| {
+                if i + 1 < n {
+                    serde_json::json!({ "children": [i + 1] })
+                } else {
+                    serde_json::json!({ "mesh": 0 })
+                }
+            })
+            .collect()
+    };
+    let cases: Vec<(&str, serde_json::Value, &str)> = vec![
+        (
+            "self",
+            serde_json::json!([{ "mesh": 0, "children": [0] }]),
+            "reached twice",
+        ),
+        (
+            "pair",
+            serde_json::json!([{ "mesh": 0, "children": [1] }, { "children": [0] }]),
+            "reached twice",
+        ),
+        ("deep", serde_json::json!(chain(10_000)), "deeper than"),
+    ];
+    for (name, nodes, needle) in cases {
+        let p = triangle_file(dir.path(), name, GOOD, true, |j| {
+            j["nodes"] = nodes.clone();
+        });
+        let msg = load_err(&p);
+        assert!(
+            msg.contains(needle) || msg.contains("invalid"),
+            "{name}: {msg}"
+        );
+    }
+    // A chain of 100 levels is fine.
+    let p = triangle_file(dir.path(), "ok", GOOD, true, |j| {
+        j["nodes"] = serde_json::json!(chain(100));
+    });
+    assert_eq!(
+        load(p.to_str().unwrap(), LoadOptions::default())
+            .unwrap()
+            .triangle_count(),
+        1
+    );
+}
+
 /// World coordinates beyond ±1e15 m (a huge node scale, or huge positions) are refused at load
 /// instead of overflowing the BVH build; the scale's determinant is checked in f64.
 #[test]
