@@ -122,6 +122,7 @@ pub fn not_implemented(what: impl Into<String>) -> anyhow::Error {
 }
 
 fn main() -> ExitCode {
+    quiet_device_select();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
@@ -144,6 +145,20 @@ fn main() -> ExitCode {
             }
             ExitCode::from(1)
         }
+    }
+}
+
+/// Without a desktop session (no `XDG_RUNTIME_DIR`), Mesa's Vulkan device-select layer tries
+/// to reach a Wayland compositor and prints "error: XDG_RUNTIME_DIR is invalid or not set"
+/// twice on every headless run, although nothing failed. The layer only orders GPUs, which
+/// wgpu does by power preference anyway, so it is turned off there (`NODEVICE_SELECT=1`,
+/// unless the user set it).
+fn quiet_device_select() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+        && std::env::var_os("NODEVICE_SELECT").is_none()
+    {
+        // SAFETY: the first statement of `main`, before any other thread exists.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
     }
 }
 

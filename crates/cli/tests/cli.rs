@@ -408,6 +408,34 @@ fn sh_project_and_irradiance() {
     assert!(stderr(&bad).contains("--format"), "{}", stderr(&bad));
 }
 
+/// A headless GPU run without a desktop session prints nothing alarming: Mesa's device-select
+/// layer used to print "error: XDG_RUNTIME_DIR is invalid or not set" twice on success.
+#[test]
+fn headless_gpu_runs_print_no_spurious_errors() {
+    if lightlab_gpu::test_context().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_lightlab"))
+        .args([
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            "phong",
+            "--width",
+            "16",
+        ])
+        .args(["-o", out.to_str().unwrap()])
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("NODEVICE_SELECT")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("error"), "{}", stderr(&o));
+}
+
 /// The GPU techniques through the command line (lavapipe in CI; skipped locally without an
 /// adapter, like every GPU test).
 #[test]
