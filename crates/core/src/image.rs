@@ -36,6 +36,26 @@ pub enum ImageError {
     },
     #[error("{path}: image contains NaN or infinite values")]
     NotFinite { path: PathBuf },
+    #[error(
+        "{path}: not written: {pixels} pixels of the image are NaN or infinite (lightlab would \
+         refuse to read it back)"
+    )]
+    NotFiniteOutput { path: PathBuf, pixels: usize },
+}
+
+impl ImageError {
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            ImageError::Io { path, .. }
+            | ImageError::Decode { path, .. }
+            | ImageError::Encode { path, .. }
+            | ImageError::UnsupportedFormat { path, .. }
+            | ImageError::ZeroSized { path, .. }
+            | ImageError::NotFinite { path }
+            | ImageError::NotFiniteOutput { path, .. } => path,
+        }
+    }
 }
 
 /// A linear Rec.709 RGB image, row-major, top row first.
@@ -198,6 +218,13 @@ impl Image {
                 });
             }
         };
+        let pixels = self.data.iter().filter(|v| !v.is_finite()).count();
+        if pixels > 0 {
+            return Err(ImageError::NotFiniteOutput {
+                path: path.into(),
+                pixels,
+            });
+        }
         let encode_err = |e: image::ImageError| ImageError::Encode {
             path: path.into(),
             message: e.to_string(),
@@ -289,6 +316,26 @@ mod tests {
         assert_eq!(back, img);
         // No temporary files left behind.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    /// An image with NaN or infinite pixels is not written, to EXR or PNG (lightlab refuses to
+    /// read such an EXR back, so writing one made a file no later step could use).
+    #[test]
+    fn images_with_nan_or_infinite_pixels_are_not_written() {
+        let dir = tempfile::tempdir().unwrap();
+        for (v, ext) in [(f32::NAN, "exr"), (f32::INFINITY, "png")] {
+            let mut img = gradient();
+            img.data[3].y = v;
+            img.data[7] = Vec3::splat(v);
+            let p = dir.path().join(format!("bad.{ext}"));
+            let e = img.write(&p, LdrSettings::default()).unwrap_err();
+            assert!(
+                matches!(e, ImageError::NotFiniteOutput { pixels: 2, .. }),
+                "{e}"
+            );
+            assert!(!p.exists());
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 
     #[test]

@@ -49,20 +49,14 @@ pub enum SceneError {
         what: String,
         problem: String,
     },
-    #[error("{path}: {0}", path = .1.display())]
+    /// An image error names its file already (it was printed twice).
+    #[error("{0}")]
     Image(lightlab_core::image::ImageError, PathBuf),
 }
 
 impl From<lightlab_core::image::ImageError> for SceneError {
     fn from(e: lightlab_core::image::ImageError) -> Self {
-        let path = match &e {
-            lightlab_core::image::ImageError::Io { path, .. }
-            | lightlab_core::image::ImageError::Decode { path, .. }
-            | lightlab_core::image::ImageError::Encode { path, .. }
-            | lightlab_core::image::ImageError::UnsupportedFormat { path, .. }
-            | lightlab_core::image::ImageError::ZeroSized { path, .. }
-            | lightlab_core::image::ImageError::NotFinite { path } => path.clone(),
-        };
+        let path = e.path().to_path_buf();
         SceneError::Image(e, path)
     }
 }
