@@ -52,6 +52,40 @@ pub fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
     })
 }
 
+/// Write `data` (rows of `bytes_per_row` bytes) into the top-left `size` of layer `layer`.
+pub fn write_layer(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    layer: u32,
+    data: &[u8],
+    bytes_per_row: u32,
+    size: [u32; 2],
+) {
+    ctx.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: tex,
+            mip_level: 0,
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: 0,
+                z: layer,
+            },
+            aspect: wgpu::TextureAspect::All,
+        },
+        data,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(bytes_per_row),
+            rows_per_image: Some(size[1]),
+        },
+        wgpu::Extent3d {
+            width: size[0],
+            height: size[1],
+            depth_or_array_layers: 1,
+        },
+    );
+}
+
 /// An Rgba16Float array texture of `layers` layers (at least two: GL decides a texture's target
 /// at creation and makes a one-layer texture a plain 2D texture that cannot be bound as an
 /// array), each filled by `fill(layer, texels)` from zero, and a clamping linear sampler.
@@ -62,46 +96,26 @@ pub fn upload_array(
     mut fill: impl FnMut(u32, &mut [half::f16]),
 ) -> (wgpu::TextureView, wgpu::Sampler) {
     let layers = layers.max(2);
-    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("light-maps"),
-        size: wgpu::Extent3d {
-            width: size[0],
-            height: size[1],
-            depth_or_array_layers: layers,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba16Float,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    let tex = texture(
+        &ctx.device,
+        "light-maps",
+        size[0],
+        size[1],
+        layers,
+        wgpu::TextureFormat::Rgba16Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
     let mut data = vec![half::f16::ZERO; (size[0] * size[1] * 4) as usize];
     for layer in 0..layers {
         data.fill(half::f16::ZERO);
         fill(layer, &mut data);
-        ctx.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &tex,
-                mip_level: 0,
-                origin: wgpu::Origin3d {
-                    x: 0,
-                    y: 0,
-                    z: layer,
-                },
-                aspect: wgpu::TextureAspect::All,
-            },
+        write_layer(
+            ctx,
+            &tex,
+            layer,
             bytemuck::cast_slice(&data),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(size[0] * 8),
-                rows_per_image: Some(size[1]),
-            },
-            wgpu::Extent3d {
-                width: size[0],
-                height: size[1],
-                depth_or_array_layers: 1,
-            },
+            size[0] * 8,
+            size,
         );
     }
     let view = tex.create_view(&wgpu::TextureViewDescriptor {

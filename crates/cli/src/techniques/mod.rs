@@ -113,12 +113,12 @@ impl TechniqueRenderer {
         let r = &mut self.renderer;
         r.render(ctx);
         let times = r.render(ctx);
-        let img = r.read_hdr(ctx)?.downsample(self.ssaa);
+        // A debug view's layer replaces the frame, which is then not read back.
         if self.technique.family() == Family::Lpv
             && let Some(layer) = lpv::debug_image(ctx, r, self.debug_view, self.ssaa)?
         {
             return Ok((layer, times));
         }
-        Ok((img, times))
+        Ok((r.read_hdr(ctx)?.downsample(self.ssaa), times))
     }
 }

@@ -4,7 +4,7 @@
 
 use super::settings::{RasterSettings, ShadowMethod};
 use crate::GpuContext;
-use crate::resources::{array_view, layer_view, texture};
+use crate::resources::{array_view, layer_view, texture, write_layer};
 
 pub(super) const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub(super) const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
@@ -176,24 +176,6 @@ pub(super) fn env_texture(
         .iter()
         .flat_map(|c| (*c * env.intensity).extend(1.0).to_array())
         .collect();
-    ctx.queue.write_texture(
-        wgpu::TexelCopyTextureInfo {
-            texture: &tex,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
-        bytemuck::cast_slice(&data),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(w * 16),
-            rows_per_image: Some(h),
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-    );
+    write_layer(ctx, &tex, 0, bytemuck::cast_slice(&data), w * 16, [w, h]);
     tex.create_view(&Default::default())
 }

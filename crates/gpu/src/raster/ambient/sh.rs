@@ -4,7 +4,7 @@
 use super::super::bindings::entry;
 use crate::GpuContext;
 use crate::prt::{ShInput, ShTransfer};
-use crate::resources::{array_view, texture};
+use crate::resources::{array_view, texture, write_layer};
 use crate::uniforms::ShUniforms;
 use wgpu::BindingResource as R;
 use wgpu::util::DeviceExt;
@@ -102,29 +102,8 @@ impl ShResources {
         for (k, p) in pages.iter().enumerate() {
             // Indices are checked below 65536 (`ShInput::validate`).
             let idx: Vec<u16> = p.indices.iter().map(|&i| i as u16).collect();
-            ctx.queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &tex,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d {
-                        x: 0,
-                        y: 0,
-                        z: k as u32,
-                    },
-                    aspect: wgpu::TextureAspect::All,
-                },
-                bytemuck::cast_slice(&idx),
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(p.width * 2),
-                    rows_per_image: Some(p.height),
-                },
-                wgpu::Extent3d {
-                    width: p.width,
-                    height: p.height,
-                    depth_or_array_layers: 1,
-                },
-            );
+            let bytes = bytemuck::cast_slice(&idx);
+            write_layer(ctx, &tex, k as u32, bytes, p.width * 2, [p.width, p.height]);
         }
         let index = array_view(&tex);
         let relight = (!pages.is_empty()).then(|| {
