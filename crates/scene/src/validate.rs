@@ -187,41 +187,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
             mesh.compute_tangents();
         }
     }
-    for inst in &scene.instances {
-        if inst.mesh >= scene.meshes.len() {
-            return Err(content(
-                format!("node '{}'", inst.name),
-                "references a mesh that does not exist".into(),
-            ));
-        }
-        // In f64: an f32 determinant of a huge scale overflows to infinity and passes.
-        let det = inst.transform.as_dmat4().determinant();
-        if !inst.transform.is_finite() || !det.is_finite() || det.abs() < 1e-20 {
-            return Err(content(
-                format!("node '{}'", inst.name),
-                "has a NaN, infinite or singular transform".into(),
-            ));
-        }
-        let mesh = &scene.meshes[inst.mesh];
-        let far = mesh
-            .positions
-            .iter()
-            .map(|p| inst.transform.transform_point3(*p).abs().max_element())
-            .fold(
-                0.0f32,
-                |a, b| if b.is_nan() { f32::INFINITY } else { a.max(b) },
-            );
-        if far > MAX_COORDINATE {
-            return Err(content(
-                format!("node '{}'", inst.name),
-                format!(
-                    "places mesh '{}' up to {far:.3e} m from the origin; world coordinates must stay \
-                     within ±{MAX_COORDINATE:.0e} m (beyond that the ray tracer's arithmetic overflows)",
-                    mesh.name
-                ),
-            ));
-        }
-    }
+    check_instances(scene, path)?;
     for l in &scene.lights {
         let what = format!("light '{}'", l.name);
         if !l.color.is_finite()
@@ -258,6 +224,52 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
             "scene".into(),
             "contains no triangle meshes".into(),
         ));
+    }
+    Ok(())
+}
+
+/// Every instance names a mesh, has a finite non-singular transform, and keeps its mesh within
+/// ±[`MAX_COORDINATE`] of the origin.
+fn check_instances(scene: &Scene, path: &Path) -> Result<(), SceneError> {
+    let content = |what: String, problem: String| SceneError::Content {
+        path: path.into(),
+        what,
+        problem,
+    };
+    for inst in &scene.instances {
+        if inst.mesh >= scene.meshes.len() {
+            return Err(content(
+                format!("node '{}'", inst.name),
+                "references a mesh that does not exist".into(),
+            ));
+        }
+        // In f64: an f32 determinant of a huge scale overflows to infinity and passes.
+        let det = inst.transform.as_dmat4().determinant();
+        if !inst.transform.is_finite() || !det.is_finite() || det.abs() < 1e-20 {
+            return Err(content(
+                format!("node '{}'", inst.name),
+                "has a NaN, infinite or singular transform".into(),
+            ));
+        }
+        let mesh = &scene.meshes[inst.mesh];
+        let far = mesh
+            .positions
+            .iter()
+            .map(|p| inst.transform.transform_point3(*p).abs().max_element())
+            .fold(
+                0.0f32,
+                |a, b| if b.is_nan() { f32::INFINITY } else { a.max(b) },
+            );
+        if far > MAX_COORDINATE {
+            return Err(content(
+                format!("node '{}'", inst.name),
+                format!(
+                    "places mesh '{}' up to {far:.3e} m from the origin; world coordinates must stay \
+                 within ±{MAX_COORDINATE:.0e} m (beyond that the ray tracer's arithmetic overflows)",
+                    mesh.name
+                ),
+            ));
+        }
     }
     Ok(())
 }
