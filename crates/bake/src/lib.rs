@@ -12,6 +12,7 @@
 
 pub mod cashl;
 pub mod detail;
+pub mod folder;
 pub mod gather;
 pub mod layout;
 pub mod output;

@@ -17,8 +17,8 @@
 //!                          Directional bakes add `directional_exr` (the ratios page).
 //! ```
 //!
-//! Every file is written to a temporary name and renamed, the manifest last, so a folder with
-//! a manifest is complete.
+//! The folder is written whole and replaces any earlier bake in one step; its manifest records
+//! the size and checksum of every page, and [`read`] verifies them (see [`crate::folder`]).
 
 use crate::layout::{Layout, unwrap_scene};
 use crate::{BakeError, BakeSettings, BakeStats, Lightmaps};
@@ -30,8 +30,10 @@ use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::Path;
 
-pub const MANIFEST: &str = "manifest.json";
-pub const FORMAT_VERSION: u32 = 1;
+pub use crate::folder::MANIFEST;
+/// 2: the manifest carries the integrity record (bake id, size and CRC-32 of every file).
+pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT: &str = "lightlab-lightmaps";
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Manifest {
@@ -69,15 +71,24 @@ pub struct Outputs {
     pub gltf: bool,
 }
 
-/// Write a bake to `dir` (created if missing).
+/// Write a bake to `dir`, replacing the bake there as a whole (see [`crate::folder`]).
 pub fn write(
     lm: &Lightmaps,
     dir: &Path,
     scene_name: &str,
     outputs: Outputs,
 ) -> Result<Manifest, BakeError> {
+    crate::folder::write(dir, |stage| write_files(lm, stage, scene_name, outputs))
+}
+
+/// Every file of a light-map bake into `dir`; returns the manifest (written by the caller).
+fn write_files(
+    lm: &Lightmaps,
+    dir: &Path,
+    scene_name: &str,
+    outputs: Outputs,
+) -> Result<Manifest, BakeError> {
     let png = outputs.png || outputs.gltf;
-    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let mut pages = vec![];
     for (k, page) in lm.pages.iter().enumerate() {
         let name = format!("lightmap-{k}.exr");
@@ -137,8 +148,8 @@ pub fn write(
     } else {
         None
     };
-    let manifest = Manifest {
-        format: "lightlab-lightmaps".into(),
+    Ok(Manifest {
+        format: FORMAT.into(),
         version: FORMAT_VERSION,
         scene: scene_name.into(),
         quantity:
@@ -151,16 +162,7 @@ pub fn write(
         png_pages,
         directional_pages,
         gltf,
-    };
-    write_manifest(dir, &manifest)?;
-    Ok(manifest)
-}
-
-/// Write `DIR/manifest.json` atomically (last, so a folder with a manifest is complete).
-pub(crate) fn write_manifest<T: Serialize>(dir: &Path, manifest: &T) -> Result<(), BakeError> {
-    let path = dir.join(MANIFEST);
-    let json = serde_json::to_string_pretty(manifest).map_err(|e| io(&path, e))?;
-    write_bytes(&path, json.as_bytes())
+    })
 }
 
 /// Write `bytes` to `path` atomically (temporary file, then rename).
@@ -247,23 +249,10 @@ fn write_gltf(
 /// Read a baked folder for `scene`: the scene is given the light-map UVs it was baked with
 /// (the unwrap is re-run with the recorded settings and must reproduce the recorded layout).
 pub fn read(dir: &Path, scene: &Scene) -> Result<Lightmaps, BakeError> {
-    let path = dir.join(MANIFEST);
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        io(
-            &path,
-            format!("{e} (is this a folder written by `lightlab bake`?)"),
-        )
-    })?;
-    let manifest: Manifest = serde_json::from_str(&text).map_err(|e| io(&path, e))?;
-    if manifest.format != "lightlab-lightmaps" || manifest.version != FORMAT_VERSION {
-        return Err(io(
-            &path,
-            format!(
-                "unsupported format {} version {} (expected lightlab-lightmaps {FORMAT_VERSION})",
-                manifest.format, manifest.version
-            ),
-        ));
-    }
+    let (folder, value) =
+        crate::folder::read_manifest(dir, FORMAT, FORMAT_VERSION, "radiosity|path")?;
+    let path = folder.manifest.clone();
+    let manifest: Manifest = folder.parse(value)?;
     let mut scene = scene.clone();
     let layout = unwrap_scene(&mut scene, &manifest.layout.settings)?;
     if layout.pages != manifest.layout.pages || layout.instances != manifest.layout.instances {
@@ -286,7 +275,7 @@ pub fn read(dir: &Path, scene: &Scene) -> Result<Lightmaps, BakeError> {
     }
     let mut pages = vec![];
     for (k, name) in manifest.pages.iter().enumerate() {
-        let p = dir.join(name);
+        let p = folder.file(name)?;
         let img = Image::read(&p).map_err(|e| io(&p, e))?;
         let [w, h] = layout.pages[k];
         if img.width != w || img.height != h {
@@ -299,7 +288,7 @@ pub fn read(dir: &Path, scene: &Scene) -> Result<Lightmaps, BakeError> {
     }
     let mut directional = vec![];
     for (k, name) in manifest.directional_pages.iter().enumerate() {
-        let p = dir.join(name);
+        let p = folder.file(name)?;
         let img = Image::read(&p).map_err(|e| io(&p, e))?;
         if Some(&[img.width, img.height]) != layout.pages.get(k) {
             return Err(io(&p, "does not match its light-map page's size"));

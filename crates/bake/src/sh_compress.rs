@@ -418,11 +418,11 @@ pub fn write_compressed(
 /// (page sizes and band count are checked).
 pub fn read_compressed(
     m: &CompressedManifest,
-    dir: &std::path::Path,
+    folder: &crate::folder::Checked,
     sl: &ShLightmaps,
 ) -> Result<CompressedSh, crate::BakeError> {
     let nc = sh::num_coeffs(sl.bands);
-    let p = dir.join(&m.file);
+    let p = folder.file(&m.file)?;
     let bytes = std::fs::read(&p).map_err(|e| io_err(&p, e))?;
     if bytes.len() != m.representatives * nc * 4 || m.representatives == 0 {
         return Err(io_err(
@@ -446,7 +446,7 @@ pub fn read_compressed(
     }
     let mut pages = vec![];
     for (name, &[w, h]) in m.index_pages.iter().zip(&sl.layout.pages) {
-        let p = dir.join(name);
+        let p = folder.file(name)?;
         let bytes = std::fs::read(&p).map_err(|e| io_err(&p, e))?;
         if bytes.len() != (w * h * 2) as usize {
             return Err(io_err(&p, format!("does not hold a {w}×{h} u16 index map")));

@@ -1,6 +1,7 @@
 //! SH and per-vertex transfer folders on disk: `bake --method sh|prt` writes them, the SH
 //! techniques read them back for a scene (with the k-means copy of `sh_compress` where the
-//! folder holds one). Each folder has a `manifest.json` naming its files; pages are EXR.
+//! folder holds one). Each folder has a `manifest.json` naming its files; pages are EXR. Both
+//! are written whole and verified on reading (see [`crate::folder`]).
 
 use crate::prt::{ShLightmaps, TransferSettings, VertexTransfer};
 use lightlab_core::sh;
@@ -39,13 +40,15 @@ pub struct ShManifest {
 }
 
 pub const SH_FORMAT: &str = "lightlab-sh-lightmaps";
+/// 2: the manifest carries the integrity record (see [`crate::folder`]).
+pub const SH_VERSION: u32 = 2;
 
 fn io_err(path: &std::path::Path, e: impl std::fmt::Display) -> crate::BakeError {
     crate::BakeError::Io(format!("{}: {e}", path.display()))
 }
 
 /// Write SH light-maps to `dir`: `sh-K-J.exr` (page K, coefficient image J, 32-bit float) and
-/// the manifest, last (a folder with a manifest is complete).
+/// the manifest, replacing the bake there as a whole.
 pub fn write_sh(
     sl: &ShLightmaps,
     compressed: Option<&crate::sh_compress::CompressedSh>,
@@ -53,8 +56,19 @@ pub fn write_sh(
     scene_name: &str,
     seconds: f64,
 ) -> Result<ShManifest, crate::BakeError> {
+    crate::folder::write(dir, |stage| {
+        write_sh_files(sl, compressed, stage, scene_name, seconds)
+    })
+}
+
+fn write_sh_files(
+    sl: &ShLightmaps,
+    compressed: Option<&crate::sh_compress::CompressedSh>,
+    dir: &std::path::Path,
+    scene_name: &str,
+    seconds: f64,
+) -> Result<ShManifest, crate::BakeError> {
     use lightlab_core::image::LdrSettings;
-    std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
     let mut pages = vec![];
     for (k, imgs) in sl.pages.iter().enumerate() {
         let mut names = vec![];
@@ -84,9 +98,9 @@ pub fn write_sh(
             list.push(name);
         }
     }
-    let m = ShManifest {
+    Ok(ShManifest {
         format: SH_FORMAT.into(),
-        version: 1,
+        version: SH_VERSION,
         scene: scene_name.into(),
         quantity: "diffuse transfer t_i = (1/pi) int V max(n.w,0) Y_i dw: E/pi = sum l_i t_i"
             .into(),
@@ -103,24 +117,7 @@ pub fn write_sh(
             Some(c) => Some(crate::sh_compress::write_compressed(c, dir)?),
             None => None,
         },
-    };
-    crate::output::write_manifest(dir, &m)?;
-    Ok(m)
-}
-
-/// The manifest of a folder baked by `lightlab bake --method {method}`: its path and text.
-fn manifest_text(
-    dir: &std::path::Path,
-    method: &str,
-) -> Result<(std::path::PathBuf, String), crate::BakeError> {
-    let path = dir.join(crate::output::MANIFEST);
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        io_err(
-            &path,
-            format!("{e} (is this a folder written by `lightlab bake --method {method}`?)"),
-        )
-    })?;
-    Ok((path, text))
+    })
 }
 
 /// Read an SH light-map folder and its compressed copy, when it has one.
@@ -128,9 +125,9 @@ pub fn read_sh_with_compressed(
     dir: &std::path::Path,
     scene: &Scene,
 ) -> Result<(ShLightmaps, Option<crate::sh_compress::CompressedSh>), crate::BakeError> {
-    let (sl, m) = read_sh_and_manifest(dir, scene)?;
+    let (sl, m, folder) = read_sh_and_manifest(dir, scene)?;
     let c = match &m.compressed {
-        Some(cm) => Some(crate::sh_compress::read_compressed(cm, dir, &sl)?),
+        Some(cm) => Some(crate::sh_compress::read_compressed(cm, &folder, &sl)?),
         None => None,
     };
     Ok((sl, c))
@@ -144,15 +141,10 @@ pub fn read_sh(dir: &std::path::Path, scene: &Scene) -> Result<ShLightmaps, crat
 fn read_sh_and_manifest(
     dir: &std::path::Path,
     scene: &Scene,
-) -> Result<(ShLightmaps, ShManifest), crate::BakeError> {
-    let (path, text) = manifest_text(dir, "sh")?;
-    let m: ShManifest = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
-    if m.format != SH_FORMAT || m.version != 1 {
-        return Err(io_err(
-            &path,
-            format!("not an SH light-map folder ({} {})", m.format, m.version),
-        ));
-    }
+) -> Result<(ShLightmaps, ShManifest, crate::folder::Checked), crate::BakeError> {
+    let (folder, value) = crate::folder::read_manifest(dir, SH_FORMAT, SH_VERSION, "sh")?;
+    let path = folder.manifest.clone();
+    let m: ShManifest = folder.parse(value)?;
     if !(1..=8).contains(&m.bands) {
         return Err(io_err(
             &path,
@@ -179,7 +171,7 @@ fn read_sh_and_manifest(
     for (k, names) in m.pages.iter().enumerate() {
         let mut imgs = vec![];
         for name in names {
-            let p = dir.join(name);
+            let p = folder.file(name)?;
             let img = lightlab_core::image::Image::read(&p).map_err(|e| io_err(&p, e))?;
             if [img.width, img.height] != layout.pages[k] {
                 return Err(io_err(&p, "does not match its page's size"));
@@ -198,7 +190,7 @@ fn read_sh_and_manifest(
         shooting: m.shooting,
         detail_pages: vec![],
     };
-    Ok((sl, m))
+    Ok((sl, m, folder))
 }
 
 /// The manifest of a baked per-vertex transfer folder (`lightlab bake --method prt`).
@@ -224,8 +216,11 @@ pub struct VertexFile {
 }
 
 pub const VERTEX_FORMAT: &str = "lightlab-vertex-transfer";
+/// 2: the manifest carries the integrity record (see [`crate::folder`]).
+pub const VERTEX_VERSION: u32 = 2;
 
-/// Write per-vertex transfer to `dir`: one `transfer-I.bin` per instance and the manifest, last.
+/// Write per-vertex transfer to `dir`: one `transfer-I.bin` per instance and the manifest,
+/// replacing the bake there as a whole.
 pub fn write_vertex_transfer(
     vt: &VertexTransfer,
     scene: &Scene,
@@ -234,7 +229,19 @@ pub fn write_vertex_transfer(
     scene_name: &str,
     seconds: f64,
 ) -> Result<VertexManifest, crate::BakeError> {
-    std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
+    crate::folder::write(dir, |dir| {
+        write_vertex_files(vt, scene, settings, dir, scene_name, seconds)
+    })
+}
+
+fn write_vertex_files(
+    vt: &VertexTransfer,
+    scene: &Scene,
+    settings: &TransferSettings,
+    dir: &std::path::Path,
+    scene_name: &str,
+    seconds: f64,
+) -> Result<VertexManifest, crate::BakeError> {
     let nc = sh::num_coeffs(vt.bands);
     let mut instances = vec![];
     for (i, (inst, data)) in scene.instances.iter().zip(&vt.instances).enumerate() {
@@ -247,9 +254,9 @@ pub fn write_vertex_transfer(
             file,
         });
     }
-    let m = VertexManifest {
+    Ok(VertexManifest {
         format: VERTEX_FORMAT.into(),
-        version: 1,
+        version: VERTEX_VERSION,
         scene: scene_name.into(),
         quantity:
             "diffuse transfer per vertex t_i = (1/pi) int V max(n.w,0) Y_i dw: E/pi = sum l_i t_i"
@@ -258,9 +265,7 @@ pub fn write_vertex_transfer(
         transfer: *settings,
         instances,
         seconds,
-    };
-    crate::output::write_manifest(dir, &m)?;
-    Ok(m)
+    })
 }
 
 /// Read a per-vertex transfer folder for `scene` (instance names and vertex counts must match).
@@ -268,29 +273,13 @@ pub fn read_vertex_transfer(
     dir: &std::path::Path,
     scene: &Scene,
 ) -> Result<(VertexTransfer, TransferSettings), crate::BakeError> {
-    let (path, text) = manifest_text(dir, "prt")?;
-    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| io_err(&path, e))?;
-    let format = v
-        .get("format")
-        .and_then(|f| f.as_str())
-        .unwrap_or("no format");
-    if format != VERTEX_FORMAT {
+    let (folder, value) = crate::folder::read_manifest(dir, VERTEX_FORMAT, VERTEX_VERSION, "prt")?;
+    let path = folder.manifest.clone();
+    let m: VertexManifest = folder.parse(value)?;
+    if !(1..=8).contains(&m.bands) {
         return Err(io_err(
             &path,
-            format!(
-                "not a per-vertex transfer folder but '{format}' (bake one with `lightlab bake \
-                 --method prt`)"
-            ),
-        ));
-    }
-    let m: VertexManifest = serde_json::from_value(v).map_err(|e| io_err(&path, e))?;
-    if m.version != 1 || !(1..=8).contains(&m.bands) {
-        return Err(io_err(
-            &path,
-            format!(
-                "unsupported version {} or band count {}",
-                m.version, m.bands
-            ),
+            format!("says {} SH bands; a bake has 1 to 8", m.bands),
         ));
     }
     let nc = sh::num_coeffs(m.bands);
@@ -307,7 +296,7 @@ pub fn read_vertex_transfer(
     }
     let mut instances = vec![];
     for f in &m.instances {
-        let p = dir.join(&f.file);
+        let p = folder.file(&f.file)?;
         let bytes = std::fs::read(&p).map_err(|e| io_err(&p, e))?;
         if bytes.len() != f.vertices * nc * 4 {
             return Err(io_err(

@@ -13,7 +13,7 @@
 //! same texel count and samples per texel and prints the time ratio.
 
 use crate::load_scene;
-use crate::options::{BakeArgs, TechniqueArgs};
+use crate::options::{BakeArgs, LoadArgs, TechniqueArgs};
 use crate::technique::Technique;
 use crate::techniques::{Bakes, Request};
 use anyhow::{Context, Result};
@@ -43,6 +43,8 @@ pub enum BenchCommand {
         /// Ignore alpha (treat alpha-tested triangles as opaque).
         #[arg(long)]
         opaque: bool,
+        #[command(flatten)]
+        load: LoadArgs,
         /// Print one JSON object with the figures as the last line.
         #[arg(long)]
         json: bool,
@@ -53,6 +55,8 @@ pub enum BenchCommand {
         scene: String,
         #[command(flatten)]
         bake: BakeArgs,
+        #[command(flatten)]
+        load: LoadArgs,
         #[arg(long)]
         json: bool,
     },
@@ -66,6 +70,8 @@ pub enum BenchCommand {
         frame: FrameBenchArgs,
         #[command(flatten)]
         gpu: TechniqueArgs,
+        #[command(flatten)]
+        load: LoadArgs,
         #[arg(long)]
         json: bool,
     },
@@ -79,16 +85,23 @@ pub fn run(cmd: BenchCommand) -> Result<()> {
             rays,
             dump,
             opaque,
+            load,
             json,
-        } => bench_trace(&scene, json, rays, dump, opaque),
-        BenchCommand::Bake { scene, bake, json } => bench_bake(&scene, &bake, json),
+        } => bench_trace((&scene, &load), json, rays, dump, opaque),
+        BenchCommand::Bake {
+            scene,
+            bake,
+            load,
+            json,
+        } => bench_bake((&scene, &load), &bake, json),
         BenchCommand::Frame {
             scene,
             technique,
             frame,
             gpu,
+            load,
             json,
-        } => bench_frame(&scene, technique, &gpu, &frame, json),
+        } => bench_frame((&scene, &load), technique, &gpu, &frame, json),
     }
 }
 
@@ -203,7 +216,7 @@ fn dump(
 }
 
 fn bench_trace(
-    scene: &str,
+    scene: (&str, &LoadArgs),
     json: bool,
     n: usize,
     dump_dir: Option<std::path::PathBuf>,
@@ -213,7 +226,7 @@ fn bench_trace(
         (1..=100_000_000).contains(&n),
         "--rays must be in 1..=100000000"
     );
-    let s = load_scene(scene, false)?;
+    let s = load_scene(scene.0, scene.1)?;
     let t = Instant::now();
     let accel = Accel::with_alpha_test(&s, !opaque);
     let build = t.elapsed().as_secs_f64();
@@ -273,9 +286,9 @@ fn reset_peak_memory() {
 }
 
 /// `lightlab bench bake`: both light-map bakers on one scene.
-fn bench_bake(scene: &str, args: &BakeArgs, json: bool) -> Result<()> {
+fn bench_bake(scene: (&str, &LoadArgs), args: &BakeArgs, json: bool) -> Result<()> {
     use lightlab_bake::{Method, bake_lightmaps, no_progress};
-    let s = load_scene(scene, false)?;
+    let s = load_scene(scene.0, scene.1)?;
     let threads = rayon::current_num_threads();
     let mut rows = serde_json::Map::new();
     println!(
@@ -399,7 +412,7 @@ struct FrameSamples {
 
 /// `lightlab bench frame`: milliseconds per pass of a GPU technique.
 fn bench_frame(
-    scene: &str,
+    scene: (&str, &LoadArgs),
     technique: Technique,
     a: &TechniqueArgs,
     f: &FrameBenchArgs,
@@ -417,7 +430,7 @@ fn bench_frame(
         (1..=10_000).contains(&f.frames),
         "--frames must be 1 to 10000"
     );
-    let mut scene = load_scene(scene, false)?;
+    let mut scene = load_scene(scene.0, scene.1)?;
     crate::options::apply_brdf(&mut scene, a.raster.brdf);
     if let Some(n) = f.lights {
         set_light_count(&mut scene, n)?;

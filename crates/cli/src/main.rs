@@ -78,6 +78,8 @@ enum Command {
         out: PathBuf,
         #[command(flatten)]
         options: options::BakeArgs,
+        #[command(flatten)]
+        load: options::LoadArgs,
         /// Print the bake's figures as one JSON object on the last line.
         #[arg(long)]
         json: bool,
@@ -172,11 +174,8 @@ pub fn gpu_context() -> Result<lightlab_gpu::GpuContext> {
     Ok(ctx)
 }
 
-pub fn load_scene(spec: &str, drop_degenerate: bool) -> Result<lightlab_scene::Scene> {
-    Ok(lightlab_scene::load(
-        spec,
-        lightlab_scene::LoadOptions { drop_degenerate },
-    )?)
+pub fn load_scene(spec: &str, load: &options::LoadArgs) -> Result<lightlab_scene::Scene> {
+    Ok(lightlab_scene::load(spec, load.options())?)
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -216,9 +215,10 @@ fn run(cli: Cli) -> Result<()> {
             method,
             out,
             options,
+            load,
             json,
         } => {
-            let scene = load_scene(&scene, false)?;
+            let scene = load_scene(&scene, &load)?;
             bake_cmd::run(&scene, &method, &out, &options, json)
         }
         Command::Render(args) => render::run(args),

@@ -17,6 +17,27 @@ use lightlab_gpu::raster::{Ambient, RasterSettings, RenderPath, ShadowMethod};
 use lightlab_scene::{BrdfModel, Scene};
 use std::path::PathBuf;
 
+/// How a glTF scene is loaded (every command that takes `--scene`).
+#[derive(Args, Clone, Copy, Debug, Default)]
+pub struct LoadArgs {
+    /// Drop zero-area triangles of glTF input instead of rejecting the file.
+    #[arg(long)]
+    pub drop_degenerate: bool,
+    /// Let the glTF's buffer, image and environment URIs name files outside its folder
+    /// (absolute paths, `file:` URIs, `../`).
+    #[arg(long)]
+    pub allow_outside_paths: bool,
+}
+
+impl LoadArgs {
+    pub fn options(&self) -> lightlab_scene::LoadOptions {
+        lightlab_scene::LoadOptions {
+            drop_degenerate: self.drop_degenerate,
+            allow_outside_paths: self.allow_outside_paths,
+        }
+    }
+}
+
 /// Every option a GPU technique may read: the renderer's, the bakers' (techniques that bake
 /// first), the SH light's and the volume's, and the folder of baked data.
 #[derive(Args, Clone, Debug, Default)]

@@ -60,9 +60,8 @@ pub struct RenderArgs {
     /// Multiplier on `--env`.
     #[arg(long, default_value_t = 1.0)]
     pub env_intensity: f32,
-    /// Drop zero-area triangles of glTF input instead of rejecting the file.
-    #[arg(long)]
-    pub drop_degenerate: bool,
+    #[command(flatten)]
+    pub load: crate::options::LoadArgs,
     /// Print one JSON object with the timings as the last line.
     #[arg(long)]
     pub json: bool,
@@ -112,7 +111,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         "--exposure must be a positive number, not {}",
         a.exposure
     );
-    let mut scene = load_scene(&a.scene, a.drop_degenerate)?;
+    let mut scene = load_scene(&a.scene, &a.load)?;
     if let Some(env) = &a.env {
         anyhow::ensure!(
             a.env_intensity.is_finite() && a.env_intensity >= 0.0,

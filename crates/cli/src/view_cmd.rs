@@ -39,15 +39,14 @@ pub struct ViewArgs {
     /// Screenshot file (key P; with --frames also written when the run ends).
     #[arg(long, default_value = "lightlab-view.png")]
     pub screenshot: PathBuf,
-    /// Drop zero-area triangles of glTF input instead of rejecting the file.
-    #[arg(long)]
-    pub drop_degenerate: bool,
+    #[command(flatten)]
+    pub load: crate::options::LoadArgs,
     #[command(flatten)]
     pub gpu: TechniqueArgs,
 }
 
 pub fn view(a: &ViewArgs) -> Result<()> {
-    let mut scene = load_scene(&a.scene, a.drop_degenerate)?;
+    let mut scene = load_scene(&a.scene, &a.load)?;
     apply_brdf(&mut scene, a.gpu.raster.brdf);
     let techniques: Vec<Technique> = Technique::gpu().collect();
     let first = techniques

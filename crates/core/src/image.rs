@@ -7,7 +7,6 @@
 
 use crate::color::{ToneMap, srgb_decode, to_srgb8};
 use glam::Vec3;
-use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -266,37 +265,7 @@ pub fn extension(path: &Path) -> String {
         .to_ascii_lowercase()
 }
 
-/// Run `write` on a temporary file beside `path`, then rename it onto `path`. On any error the
-/// temporary file is removed and `path` is left untouched.
-pub fn write_atomic<E: From<ImageError>>(
-    path: &Path,
-    write: impl FnOnce(File) -> Result<(), E>,
-) -> Result<(), E> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "output".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let io = |e: std::io::Error, p: &Path| ImageError::Io {
-        path: p.into(),
-        source: e,
-    };
-    let file = File::create(&tmp).map_err(|e| E::from(io(e, path)))?;
-    match write(file) {
-        Ok(()) => std::fs::rename(&tmp, path).map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            E::from(io(e, path))
-        }),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
-}
+pub use crate::atomic::write_atomic;
 
 #[cfg(test)]
 mod tests {

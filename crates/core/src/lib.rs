@@ -23,6 +23,7 @@
 //! Conventions (docs/ARCHITECTURE.md): right-handed, Y-up, metres; linear Rec.709 RGB radiometry.
 #![forbid(unsafe_code)]
 
+pub mod atomic;
 pub mod brdf;
 pub mod color;
 pub mod image;

@@ -55,17 +55,14 @@ pub fn import(path: &Path, opts: LoadOptions) -> Result<Scene, SceneError> {
     // validator's.
     check_required_extensions(path, &bytes)?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| gltf_err(path, e))?;
-    let base = path.parent().unwrap_or(Path::new("."));
     let gltf::Gltf { document, blob } = gltf;
-    let buffers = gltf::import_buffers(&document, Some(base), blob)
-        .map_err(|e| gltf_err(path, format!("buffer: {e}")))?;
-    let images = gltf::import_images(&document, Some(base), &buffers)
-        .map_err(|e| gltf_err(path, format!("image: {e}")))?;
+    let inputs = crate::gltf_input::read(path, &document, blob, opts)?;
     let mut scene = Importer {
         path,
+        opts,
         doc: &document,
-        buffers: &buffers,
-        images: &images,
+        buffers: &inputs.buffers,
+        images: &inputs.images,
         scene: Scene::default(),
         mesh_map: HashMap::new(),
         tex_map: HashMap::new(),
@@ -111,9 +108,10 @@ fn check_required_extensions(path: &Path, bytes: &[u8]) -> Result<(), SceneError
 
 struct Importer<'a> {
     path: &'a Path,
+    opts: LoadOptions,
     doc: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
-    images: &'a [gltf::image::Data],
+    images: &'a [image::DynamicImage],
     scene: Scene,
     /// (glTF mesh, primitive) → lightlab mesh.
     mesh_map: HashMap<(usize, usize), usize>,
@@ -210,7 +208,8 @@ impl Importer<'_> {
                 .get("uri")
                 .and_then(|u| u.as_str())
                 .ok_or_else(|| gltf_err(self.path, "extras.lightlab.environment has no uri"))?;
-            let file = self.path.parent().unwrap_or(Path::new(".")).join(uri);
+            let file = crate::gltf_input::resolve(self.path, uri, self.opts)
+                .map_err(|m| gltf_err(self.path, format!("extras.lightlab.environment: {m}")))?;
             let image = Image::read(&file)?;
             let intensity = env.get("intensity").and_then(|v| v.as_f64()).unwrap_or(1.0) as f32;
             self.scene.environment = Some(Environment { image, intensity });
@@ -229,7 +228,7 @@ impl Importer<'_> {
             .name()
             .map(String::from)
             .unwrap_or_else(|| format!("image{img_index}"));
-        let (w, h) = (img.width, img.height);
+        let (w, h) = (img.width(), img.height());
         if w == 0 || h == 0 {
             return Err(SceneError::Content {
                 path: self.path.into(),
@@ -237,30 +236,12 @@ impl Importer<'_> {
                 problem: "has zero size".into(),
             });
         }
-        use gltf::image::Format as F;
-        let px = |i: usize| -> Vec4 {
-            let p = &img.pixels;
-            let b = |k: usize| p[k] as f32 / 255.0;
-            let s = |k: usize| u16::from_le_bytes([p[k], p[k + 1]]) as f32 / 65535.0;
-            let f = |k: usize| f32::from_le_bytes([p[k], p[k + 1], p[k + 2], p[k + 3]]);
-            match img.format {
-                F::R8 => Vec4::new(b(i), b(i), b(i), 1.0),
-                F::R8G8 => Vec4::new(b(2 * i), b(2 * i), b(2 * i), b(2 * i + 1)),
-                F::R8G8B8 => Vec4::new(b(3 * i), b(3 * i + 1), b(3 * i + 2), 1.0),
-                F::R8G8B8A8 => Vec4::new(b(4 * i), b(4 * i + 1), b(4 * i + 2), b(4 * i + 3)),
-                F::R16 => Vec4::new(s(2 * i), s(2 * i), s(2 * i), 1.0),
-                F::R16G16 => Vec4::new(s(4 * i), s(4 * i), s(4 * i), s(4 * i + 2)),
-                F::R16G16B16 => Vec4::new(s(6 * i), s(6 * i + 2), s(6 * i + 4), 1.0),
-                F::R16G16B16A16 => Vec4::new(s(8 * i), s(8 * i + 2), s(8 * i + 4), s(8 * i + 6)),
-                F::R32G32B32FLOAT => Vec4::new(f(12 * i), f(12 * i + 4), f(12 * i + 8), 1.0),
-                F::R32G32B32A32FLOAT => {
-                    Vec4::new(f(16 * i), f(16 * i + 4), f(16 * i + 8), f(16 * i + 12))
-                }
-            }
-        };
-        let data = (0..(w * h) as usize)
-            .map(|i| {
-                let v = px(i);
+        // Grey images spread to RGB and grey–alpha keeps its alpha, as glTF reads them.
+        let data = img
+            .to_rgba32f()
+            .pixels()
+            .map(|p| {
+                let v = Vec4::from_array(p.0);
                 if srgb {
                     Vec4::new(srgb_decode(v.x), srgb_decode(v.y), srgb_decode(v.z), v.w)
                 } else {

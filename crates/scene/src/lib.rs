@@ -8,6 +8,7 @@
 
 pub mod builtin;
 pub mod emitters;
+pub mod gltf_input;
 pub mod gltf_io;
 pub mod model;
 pub mod simplify;
@@ -66,6 +67,9 @@ impl From<lightlab_core::image::ImageError> for SceneError {
 pub struct LoadOptions {
     /// Drop zero-area triangles instead of rejecting the file.
     pub drop_degenerate: bool,
+    /// Let buffer, image and environment URIs name files outside the glTF file's folder
+    /// (absolute paths, `file:` URIs, `../`); refused by default (see [`gltf_input`]).
+    pub allow_outside_paths: bool,
 }
 
 /// Load a built-in scene by name, or a `.gltf`/`.glb` file by path, and validate it.

@@ -420,6 +420,7 @@ fn degenerate_triangles_are_rejected_or_dropped_on_request() {
         p.to_str().unwrap(),
         LoadOptions {
             drop_degenerate: true,
+            ..Default::default()
         },
     )
     .unwrap_err();
