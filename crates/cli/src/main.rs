@@ -125,6 +125,7 @@ pub fn not_implemented(what: impl Into<String>) -> anyhow::Error {
 
 fn main() -> ExitCode {
     quiet_device_select();
+    remove_unfinished_outputs_on_signals();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
@@ -162,6 +163,23 @@ fn quiet_device_select() {
         // SAFETY: the first statement of `main`, before any other thread exists.
         unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
     }
+}
+
+/// On SIGINT, SIGTERM or SIGHUP, remove every temporary file and staging folder in flight
+/// (`lightlab_core::atomic`) and exit with 128 + the signal, as a shell reports it: an
+/// interrupted `render` or `bake` leaves the previous output whole and no temporaries.
+fn remove_unfinished_outputs_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(sig) = signals.forever().next() {
+            let n = lightlab_core::atomic::remove_in_flight();
+            eprintln!("lightlab: interrupted (signal {sig}); removed {n} unfinished output(s)");
+            std::process::exit(128 + sig);
+        }
+    });
 }
 
 /// A GPU context, with the adapter named on stderr.

@@ -117,11 +117,14 @@ pub fn run(a: RenderArgs) -> Result<()> {
             a.env_intensity.is_finite() && a.env_intensity >= 0.0,
             "--env-intensity must be a finite, non-negative number"
         );
-        let image = Image::read(env)?;
-        scene.environment = Some(lightlab_scene::Environment {
-            image,
+        let environment = lightlab_scene::Environment {
+            image: Image::read(env)?,
             intensity: a.env_intensity,
-        });
+        };
+        environment
+            .check()
+            .map_err(|m| anyhow::anyhow!("--env {}: {m}", env.display()))?;
+        scene.environment = Some(environment);
     }
     crate::options::apply_brdf(&mut scene, a.gpu.raster.brdf);
     a.technique.check_options(&a.gpu, a.indirect_only)?;

@@ -155,6 +155,39 @@ pub fn write_atomic<E: From<crate::image::ImageError>>(
     result
 }
 
+/// Write several files as one output (a `.gltf` with its `.bin` and environment map): every
+/// file is first written to its temporary, and only when all are complete are they renamed
+/// into place, in the order given (the file that names the others last). A failure before
+/// that leaves nothing behind, neither new files nor temporaries.
+pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<(), crate::image::ImageError> {
+    let io = |e: std::io::Error, p: &Path| crate::image::ImageError::Io {
+        path: p.into(),
+        source: e,
+    };
+    let mut temps = vec![];
+    for (path, bytes) in files {
+        remove_stale(path);
+        let tmp = InFlight::new(temporary_name(path));
+        let written = std::fs::write(tmp.path(), bytes).map_err(|e| io(e, path));
+        temps.push(tmp);
+        if let Err(e) = written {
+            for t in &temps {
+                let _ = std::fs::remove_file(t.path());
+            }
+            return Err(e);
+        }
+    }
+    for (k, ((path, _), tmp)) in files.iter().zip(&temps).enumerate() {
+        if let Err(e) = std::fs::rename(tmp.path(), path) {
+            for t in &temps[k..] {
+                let _ = std::fs::remove_file(t.path());
+            }
+            return Err(io(e, path));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

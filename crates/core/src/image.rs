@@ -7,7 +7,7 @@
 
 use crate::color::{ToneMap, srgb_decode, to_srgb8};
 use glam::Vec3;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Errors of image reading and writing; every variant names the file.
@@ -151,11 +151,17 @@ impl Image {
                 });
             }
         };
-        let reader = image::ImageReader::open(path).map_err(|e| ImageError::Io {
+        let bytes = std::fs::read(path).map_err(|e| ImageError::Io {
             path: path.into(),
             source: e,
         })?;
-        let decoded = reader
+        Self::decode(path, &bytes, linear)
+    }
+
+    /// Decode the bytes of an image file (format from its content; `path` names it in
+    /// errors). `linear`: the values are radiometric (EXR, HDR); otherwise sRGB-decoded.
+    pub fn decode(path: &Path, bytes: &[u8], linear: bool) -> Result<Image, ImageError> {
+        let decoded = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| ImageError::Io {
                 path: path.into(),
@@ -206,8 +212,19 @@ impl Image {
 
     /// Write by extension: `.exr` (linear f32) or `.png` (tone-mapped sRGB), atomically.
     pub fn write(&self, path: &Path, ldr: LdrSettings) -> Result<(), ImageError> {
-        let ext = extension(path);
-        let format = match ext.as_str() {
+        let bytes = self.encode(path, ldr)?;
+        write_atomic(path, |mut file| {
+            file.write_all(&bytes).map_err(|e| ImageError::Io {
+                path: path.into(),
+                source: e,
+            })
+        })
+    }
+
+    /// The bytes [`Image::write`] would write to `path` (format by its extension). An image
+    /// with NaN or infinite pixels is refused.
+    pub fn encode(&self, path: &Path, ldr: LdrSettings) -> Result<Vec<u8>, ImageError> {
+        let format = match extension(path).as_str() {
             "exr" => image::ImageFormat::OpenExr,
             "png" => image::ImageFormat::Png,
             _ => {
@@ -228,32 +245,28 @@ impl Image {
             path: path.into(),
             message: e.to_string(),
         };
-        write_atomic(path, |file| {
-            let mut w = BufWriter::new(file);
-            match format {
-                image::ImageFormat::OpenExr => {
-                    let flat: Vec<f32> = self.data.iter().flat_map(|v| v.to_array()).collect();
-                    let buf = image::Rgb32FImage::from_raw(self.width, self.height, flat)
-                        .expect("buffer size matches dimensions");
-                    image::DynamicImage::ImageRgb32F(buf)
-                        .write_to(&mut w, format)
-                        .map_err(encode_err)?;
-                }
-                _ => {
-                    let buf =
-                        image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(ldr))
-                            .expect("buffer size matches dimensions");
-                    image::DynamicImage::ImageRgb8(buf)
-                        .write_to(&mut w, format)
-                        .map_err(encode_err)?;
-                }
+        let mut out = std::io::Cursor::new(Vec::new());
+        let img = match format {
+            image::ImageFormat::OpenExr => {
+                let flat: Vec<f32> = self.data.iter().flat_map(|v| v.to_array()).collect();
+                image::Rgb32FImage::from_raw(self.width, self.height, flat)
+                    .map(image::DynamicImage::ImageRgb32F)
             }
-            w.flush().map_err(|e| ImageError::Io {
-                path: path.into(),
-                source: e,
-            })?;
-            Ok(())
-        })
+            _ => image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(ldr))
+                .map(image::DynamicImage::ImageRgb8),
+        };
+        img.ok_or_else(|| ImageError::Encode {
+            path: path.into(),
+            message: format!(
+                "{} pixels do not make a {}×{} image",
+                self.data.len(),
+                self.width,
+                self.height
+            ),
+        })?
+        .write_to(&mut out, format)
+        .map_err(encode_err)?;
+        Ok(out.into_inner())
     }
 }
 

@@ -71,6 +71,7 @@ pub fn read(
     }
     check_views(path, doc, &buffers)?;
     check_accessors(path, doc)?;
+    check_attribute_types(path, doc)?;
     let images = doc
         .images()
         .map(|img| read_image(path, &img, &buffers, opts))
@@ -257,6 +258,12 @@ fn fits(offset: usize, stride: usize, count: usize, element: usize, view: usize)
 fn check_accessors(path: &Path, doc: &gltf::Document) -> Result<(), SceneError> {
     for a in doc.accessors() {
         let what = format!("accessor {}", a.index());
+        if a.count() == 0 {
+            return Err(err(
+                path,
+                format!("{what} has count 0 (glTF requires at least 1)"),
+            ));
+        }
         let elem = element_size(a.data_type(), a.dimensions());
         if let Some(view) = a.view() {
             let stride = view.stride().unwrap_or(elem);
@@ -306,6 +313,52 @@ fn check_accessors(path: &Path, doc: &gltf::Document) -> Result<(), SceneError> 
                     path,
                     format!("{what}: its sparse indices or values run past their bufferView"),
                 ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Each attribute lightlab reads has the type glTF prescribes for it (the `gltf` crate's reader
+/// assumes so, and panics on a FLOAT VEC2 POSITION or FLOAT indices).
+fn check_attribute_types(path: &Path, doc: &gltf::Document) -> Result<(), SceneError> {
+    use DataType as T;
+    use Dimensions as D;
+    use gltf::Semantic as S;
+    for mesh in doc.meshes() {
+        for prim in mesh.primitives() {
+            let what = format!("mesh {} primitive {}", mesh.index(), prim.index());
+            let bad = |name: String, a: &gltf::Accessor| {
+                err(
+                    path,
+                    format!(
+                        "{what}: {name} is accessor {} of {:?} {:?}, which glTF does not allow for it",
+                        a.index(),
+                        a.dimensions(),
+                        a.data_type()
+                    ),
+                )
+            };
+            for (sem, a) in prim.attributes() {
+                let (dt, dims) = (a.data_type(), a.dimensions());
+                let ok = match &sem {
+                    S::Positions | S::Normals => dims == D::Vec3 && dt == T::F32,
+                    S::Tangents => dims == D::Vec4 && dt == T::F32,
+                    S::TexCoords(_) => dims == D::Vec2 && matches!(dt, T::F32 | T::U8 | T::U16),
+                    S::Colors(_) => {
+                        matches!(dims, D::Vec3 | D::Vec4) && matches!(dt, T::F32 | T::U8 | T::U16)
+                    }
+                    _ => true,
+                };
+                if !ok {
+                    return Err(bad(sem.to_string(), &a));
+                }
+            }
+            if let Some(a) = prim.indices()
+                && !(a.dimensions() == D::Scalar
+                    && matches!(a.data_type(), T::U8 | T::U16 | T::U32))
+            {
+                return Err(bad("indices".into(), &a));
             }
         }
     }

@@ -21,10 +21,9 @@ use crate::model::*;
 use crate::{LoadOptions, SceneError};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use lightlab_core::color::{srgb_decode, srgb_encode};
-use lightlab_core::image::{Image, LdrSettings, write_atomic};
+use lightlab_core::image::{Image, LdrSettings};
 use serde_json::{Value, json};
 use std::collections::HashMap;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The extensions lightlab reads; files that *require* any other are rejected.
@@ -51,10 +50,16 @@ pub fn import(path: &Path, opts: LoadOptions) -> Result<Scene, SceneError> {
         path: path.into(),
         source: e,
     })?;
+    import_slice(path, &bytes, opts)
+}
+
+/// Import the bytes of a `.gltf` or `.glb` file that lives at `path` (relative URIs resolve
+/// beside it; errors name it).
+pub fn import_slice(path: &Path, bytes: &[u8], opts: LoadOptions) -> Result<Scene, SceneError> {
     // Check required extensions on the raw JSON first, for a clearer message than the
     // validator's.
-    check_required_extensions(path, &bytes)?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| gltf_err(path, e))?;
+    check_required_extensions(path, bytes)?;
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| gltf_err(path, e))?;
     let gltf::Gltf { document, blob } = gltf;
     let inputs = crate::gltf_input::read(path, &document, blob, opts)?;
     let mut scene = Importer {
@@ -82,17 +87,13 @@ pub fn import(path: &Path, opts: LoadOptions) -> Result<Scene, SceneError> {
 
 fn check_required_extensions(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
     let json_bytes: &[u8] = if bytes.starts_with(b"glTF") {
-        if bytes.len() < 20 {
-            return Err(gltf_err(path, "truncated GLB header"));
-        }
-        let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-        bytes
-            .get(20..20 + len)
-            .ok_or_else(|| gltf_err(path, "truncated GLB JSON chunk"))?
+        glb_json(bytes).map_err(|m| gltf_err(path, m))?
     } else {
         bytes
     };
     let v: Value = serde_json::from_slice(json_bytes).map_err(|e| gltf_err(path, e))?;
+    check_attribute_indices(path, &v)?;
+    check_image_sources(path, &v)?;
     if let Some(req) = v.get("extensionsRequired").and_then(|r| r.as_array()) {
         for e in req.iter().filter_map(|e| e.as_str()) {
             if !SUPPORTED_EXTENSIONS.contains(&e) {
@@ -100,6 +101,99 @@ fn check_required_extensions(path: &Path, bytes: &[u8]) -> Result<(), SceneError
                     path: path.into(),
                     extension: e.into(),
                 });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The JSON chunk of a GLB, after checking the header and chunk lengths (the `gltf` crate
+/// subtracts the header size from the stated length before comparing, and overflows on a
+/// length under 12).
+fn glb_json(bytes: &[u8]) -> Result<&[u8], String> {
+    let word = |k: usize| {
+        bytes
+            .get(k..k + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+            .ok_or_else(|| "truncated GLB header".to_string())
+    };
+    let (version, total, json_len) = (word(4)?, word(8)?, word(12)?);
+    if version != 2 {
+        return Err(format!("GLB version {version} (lightlab reads version 2)"));
+    }
+    if total < 20 || total > bytes.len() {
+        return Err(format!(
+            "the GLB header says {total} bytes, the file has {}",
+            bytes.len()
+        ));
+    }
+    if bytes.get(16..20) != Some(b"JSON") {
+        return Err("the first GLB chunk is not JSON".into());
+    }
+    let json = bytes
+        .get(20..20usize.saturating_add(json_len))
+        .filter(|_| 20 + json_len <= total)
+        .ok_or_else(|| "truncated GLB JSON chunk".to_string())?;
+    let bin = (20 + json_len).next_multiple_of(4);
+    if bin + 8 <= total {
+        let bin_len = word(bin)?;
+        if bin.saturating_add(8).saturating_add(bin_len) > total {
+            return Err(format!(
+                "the GLB's second chunk says {bin_len} bytes, past the end of the file"
+            ));
+        }
+    }
+    Ok(json)
+}
+
+/// Every image has a `uri`, or a `bufferView` with a `mimeType`, as glTF requires (the `gltf`
+/// crate unwraps both).
+fn check_image_sources(path: &Path, v: &Value) -> Result<(), SceneError> {
+    let images = v.get("images").and_then(Value::as_array);
+    for (i, img) in images.into_iter().flatten().enumerate() {
+        let ok = match (img.get("uri"), img.get("bufferView")) {
+            (Some(u), None) => u.is_string(),
+            (None, Some(_)) => img.get("mimeType").is_some_and(Value::is_string),
+            _ => false,
+        };
+        if !ok {
+            return Err(gltf_err(
+                path,
+                format!("image {i} needs a uri, or a bufferView with a mimeType (not both)"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every primitive's attribute and index accessors exist: the `gltf` crate's validator indexes
+/// the POSITION accessor before checking that it exists, and panics on a file where it does
+/// not.
+fn check_attribute_indices(path: &Path, v: &Value) -> Result<(), SceneError> {
+    let accessors = v
+        .get("accessors")
+        .and_then(Value::as_array)
+        .map_or(0, Vec::len);
+    let meshes = v.get("meshes").and_then(Value::as_array);
+    for (mi, mesh) in meshes.into_iter().flatten().enumerate() {
+        let prims = mesh.get("primitives").and_then(Value::as_array);
+        for (pi, prim) in prims.into_iter().flatten().enumerate() {
+            let attrs = prim.get("attributes").and_then(Value::as_object);
+            let refs = attrs
+                .into_iter()
+                .flatten()
+                .map(|(k, a)| (k.as_str(), a))
+                .chain(prim.get("indices").map(|i| ("indices", i)));
+            for (name, a) in refs {
+                if a.as_u64().is_none_or(|i| i as usize >= accessors) {
+                    return Err(gltf_err(
+                        path,
+                        format!(
+                            "mesh {mi} primitive {pi}: {name} names accessor {a}, which does not \
+                             exist ({accessors} accessors)"
+                        ),
+                    ));
+                }
             }
         }
     }
@@ -210,7 +304,8 @@ impl Importer<'_> {
                 .ok_or_else(|| gltf_err(self.path, "extras.lightlab.environment has no uri"))?;
             let file = crate::gltf_input::resolve(self.path, uri, self.opts)
                 .map_err(|m| gltf_err(self.path, format!("extras.lightlab.environment: {m}")))?;
-            let image = Image::read(&file)?;
+            let image = Image::read(&file)
+                .map_err(|e| gltf_err(self.path, format!("extras.lightlab.environment: {e}")))?;
             let intensity = env.get("intensity").and_then(|v| v.as_f64()).unwrap_or(1.0) as f32;
             self.scene.environment = Some(Environment { image, intensity });
         }
@@ -579,14 +674,14 @@ pub fn export_with(scene: &Scene, path: &Path, extras: &ExportExtras) -> Result<
         path,
         extras,
     )?;
+    // Every file is complete before any is renamed into place, the glTF last: a failure
+    // leaves no orphan .bin or .env.exr.
+    let mut files = vec![];
     if let Some(env) = &scene.environment {
-        env.image
-            .write(&dir.join(&env_uri), LdrSettings::default())?;
+        let p = dir.join(&env_uri);
+        let bytes = env.image.encode(&p, LdrSettings::default())?;
+        files.push((p, bytes));
     }
-    let io = |e: std::io::Error| SceneError::Io {
-        path: path.into(),
-        source: e,
-    };
     while !w.bin.len().is_multiple_of(4) {
         w.bin.push(0);
     }
@@ -597,30 +692,34 @@ pub fn export_with(scene: &Scene, path: &Path, extras: &ExportExtras) -> Result<
             json_bytes.push(b' ');
         }
         let total = 12 + 8 + json_bytes.len() + 8 + w.bin.len();
-        write_atomic(path, |mut f| -> Result<(), SceneError> {
-            let mut out = Vec::with_capacity(total);
-            out.extend(b"glTF");
-            out.extend(2u32.to_le_bytes());
-            out.extend((total as u32).to_le_bytes());
-            out.extend((json_bytes.len() as u32).to_le_bytes());
-            out.extend(b"JSON");
-            out.extend(&json_bytes);
-            out.extend((w.bin.len() as u32).to_le_bytes());
-            out.extend(b"BIN\0");
-            out.extend(&w.bin);
-            f.write_all(&out).map_err(io)
-        })?;
+        if total > u32::MAX as usize {
+            return Err(SceneError::Content {
+                path: path.into(),
+                what: "output".into(),
+                problem: format!(
+                    "{total} bytes exceed the 4 GiB limit of a .glb; write a .gltf instead"
+                ),
+            });
+        }
+        let mut out = Vec::with_capacity(total);
+        out.extend(b"glTF");
+        out.extend(2u32.to_le_bytes());
+        out.extend((total as u32).to_le_bytes());
+        out.extend((json_bytes.len() as u32).to_le_bytes());
+        out.extend(b"JSON");
+        out.extend(&json_bytes);
+        out.extend((w.bin.len() as u32).to_le_bytes());
+        out.extend(b"BIN\0");
+        out.extend(&w.bin);
+        files.push((path.to_path_buf(), out));
     } else {
         let bin_uri = format!("{stem}.bin");
         root["buffers"][0]["uri"] = json!(bin_uri);
-        write_atomic(&dir.join(&bin_uri), |mut f| -> Result<(), SceneError> {
-            f.write_all(&w.bin).map_err(io)
-        })?;
+        files.push((dir.join(&bin_uri), std::mem::take(&mut w.bin)));
         let text = serde_json::to_vec_pretty(&root).expect("serialisable");
-        write_atomic(path, |mut f| -> Result<(), SceneError> {
-            f.write_all(&text).map_err(io)
-        })?;
+        files.push((path.to_path_buf(), text));
     }
+    lightlab_core::atomic::write_all_atomic(&files)?;
     Ok(())
 }
 

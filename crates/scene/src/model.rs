@@ -360,6 +360,36 @@ pub struct Environment {
 }
 
 impl Environment {
+    /// The brightest radiance an environment may have: far above any sky, and far enough
+    /// below f32's range that integrals over it (× 4π × sample weights) stay finite.
+    pub const MAX_RADIANCE: f32 = 1e30;
+
+    /// Intensity finite and non-negative, and intensity × the brightest pixel within
+    /// [`Self::MAX_RADIANCE`] (an intensity of 1e38 on a pixel of 10 overflowed f32 and
+    /// filled the images with NaN). The message says what is wrong.
+    pub fn check(&self) -> Result<(), String> {
+        if !(self.intensity.is_finite() && self.intensity >= 0.0) {
+            return Err(format!(
+                "intensity {} must be a finite, non-negative number",
+                self.intensity
+            ));
+        }
+        let brightest = self
+            .image
+            .data
+            .iter()
+            .map(|v| v.max_element())
+            .fold(0.0f32, f32::max);
+        if (brightest as f64) * (self.intensity as f64) > Self::MAX_RADIANCE as f64 {
+            return Err(format!(
+                "intensity {} × the brightest pixel {brightest} exceeds {:e}",
+                self.intensity,
+                Self::MAX_RADIANCE
+            ));
+        }
+        Ok(())
+    }
+
     /// Direction → equirectangular uv in [0,1)² (`lightlab_core::sh_env`'s lat-long convention).
     pub fn dir_to_uv(d: Vec3) -> Vec2 {
         lightlab_core::sh_env::latlong_dir_to_uv(d)

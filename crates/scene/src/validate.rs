@@ -46,6 +46,15 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
             m.normal_texture,
             m.transmission_texture,
         ];
+        if let Some(r) = refs.iter().flatten().find(|r| r.uv_set > 1) {
+            return Err(content(
+                format!("material '{}'", m.name),
+                format!(
+                    "a texture reads TEXCOORD_{}; lightlab reads TEXCOORD_0 and TEXCOORD_1",
+                    r.uv_set
+                ),
+            ));
+        }
         if refs.iter().flatten().any(|r| r.texture >= ntex) {
             return Err(content(
                 format!("material '{}'", m.name),
@@ -134,6 +143,25 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         if mesh.uv0.iter().any(|u| !u.is_finite()) {
             return Err(geo(&name, "TEXCOORD_0 has NaN or infinite values".into()));
         }
+        let uv1_needed = {
+            let m = &scene.materials[mesh.material];
+            [
+                m.base_color_texture,
+                m.metallic_roughness_texture,
+                m.emissive_texture,
+                m.normal_texture,
+                m.transmission_texture,
+            ]
+            .iter()
+            .flatten()
+            .any(|r| r.uv_set == 1)
+        };
+        if uv1_needed && mesh.uv1.is_none() {
+            return Err(geo(
+                &name,
+                "has no TEXCOORD_1 but a texture of its material reads it".into(),
+            ));
+        }
         if let Some(uv1) = &mesh.uv1
             && (uv1.len() != n || uv1.iter().any(|u| !u.is_finite()))
         {
@@ -183,6 +211,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         if mesh.normals.iter().any(|v| !v.is_finite()) {
             return Err(geo(&name, "NORMAL has NaN or infinite values".into()));
         }
+        repair_normals(mesh);
         if mesh.tangents.len() != n || mesh.tangents.iter().any(|t| !t.is_finite()) {
             mesh.compute_tangents();
         }
@@ -191,6 +220,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
     for l in &scene.lights {
         let what = format!("light '{}'", l.name);
         if !l.color.is_finite()
+            || l.color.min_element() < 0.0
             || !l.intensity.is_finite()
             || l.intensity < 0.0
             || !l.position.is_finite()
@@ -198,7 +228,23 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         {
             return Err(content(
                 what,
-                "has NaN, infinite or negative parameters".into(),
+                "has NaN, infinite or negative colour, intensity, position or direction".into(),
+            ));
+        }
+        if let Some(r) = l.range
+            && !(r.is_finite() && r > 0.0)
+        {
+            return Err(content(
+                what,
+                format!("range {r} must be a positive number (or absent: no cut-off)"),
+            ));
+        }
+        if let LightKind::Directional { angular_diameter } = l.kind
+            && !(0.0..std::f32::consts::PI).contains(&angular_diameter)
+        {
+            return Err(content(
+                what,
+                format!("angular diameter {angular_diameter} must be 0 to π radians"),
             ));
         }
         if let LightKind::Spot {
@@ -219,6 +265,10 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
             ));
         }
     }
+    if let Some(env) = &scene.environment {
+        env.check()
+            .map_err(|m| content("extras.lightlab.environment".into(), m))?;
+    }
     if scene.instances.is_empty() {
         return Err(content(
             "scene".into(),
@@ -226,6 +276,23 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         ));
     }
     Ok(())
+}
+
+/// Normals of unit length: a zero-length normal (which shaded as NaN on the GPU) takes the
+/// area-weighted normal of its triangles, and the others are normalised.
+fn repair_normals(mesh: &mut crate::Mesh) {
+    const SHORT: f32 = 1e-12;
+    if mesh.normals.iter().all(|n| n.length_squared() > SHORT) {
+        mesh.normals.iter_mut().for_each(|n| *n = n.normalize());
+        return;
+    }
+    let authored = std::mem::take(&mut mesh.normals);
+    mesh.compute_normals();
+    for (n, a) in mesh.normals.iter_mut().zip(authored) {
+        if a.length_squared() > SHORT {
+            *n = a.normalize();
+        }
+    }
 }
 
 /// Every instance names a mesh, has a finite non-singular transform, and keeps its mesh within
