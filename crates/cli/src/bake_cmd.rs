@@ -11,6 +11,8 @@ use std::path::Path;
 
 /// `lightlab bake --method radiosity|path`.
 pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
+    // Before any work: a bake replaces its folder whole, so it must be new, empty or a bake.
+    lightlab_bake::folder::check_destination(out)?;
     // Textured PRT's data are SH light-maps (transfer per light-map texel).
     if ["sh", "shl", "prt-textured"].contains(&method) {
         return bake_sh(scene, out, args, json);

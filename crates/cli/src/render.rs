@@ -105,6 +105,15 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if ext != "exr" && ext != "png" {
         bail!("{}: the output must be .exr or .png", a.output.display());
     }
+    // Before any work: the folder the image goes to exists.
+    let folder = lightlab_core::atomic::parent(&a.output);
+    if !folder.is_dir() {
+        bail!(
+            "{}: the folder {} does not exist",
+            a.output.display(),
+            folder.display()
+        );
+    }
     // Checked before any work: NaN, infinite or negative exposure gave a black PNG.
     anyhow::ensure!(
         a.exposure.is_finite() && a.exposure > 0.0,

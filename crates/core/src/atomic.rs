@@ -164,6 +164,10 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<(), crate::image
         path: p.into(),
         source: e,
     };
+    // A destination that is a folder would fail its rename after the others succeeded.
+    if let Some((path, _)) = files.iter().find(|(p, _)| p.is_dir()) {
+        return Err(io(std::io::Error::other("is a folder"), path));
+    }
     let mut temps = vec![];
     for (path, bytes) in files {
         remove_stale(path);

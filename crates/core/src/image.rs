@@ -202,6 +202,28 @@ impl Image {
         })
     }
 
+    /// EXR, RGB f32, RLE in 64² tiles written in increasing order: the same pixels give the
+    /// same bytes (the `image` crate's encoder writes tiles in the order its threads finish,
+    /// so two writes of one image differed, and bake folders could not be compared by
+    /// checksum).
+    fn encode_exr(&self, out: &mut std::io::Cursor<Vec<u8>>) -> exr::error::UnitResult {
+        use exr::prelude::*;
+        let (w, h) = (self.width as usize, self.height as usize);
+        let encoding = Encoding {
+            compression: Compression::RLE,
+            blocks: Blocks::Tiles(Vec2(64, 64)),
+            line_order: LineOrder::Increasing,
+        };
+        let data = &self.data;
+        let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+            let v = data[p.y() * w + p.x()];
+            (v.x, v.y, v.z)
+        });
+        exr::prelude::Image::from_encoded_channels((w, h), encoding, channels)
+            .write()
+            .to_buffered(out)
+    }
+
     /// 8-bit sRGB bytes (RGB, row-major) after exposure and tone mapping.
     pub fn to_srgb8(&self, ldr: LdrSettings) -> Vec<u8> {
         self.data
@@ -245,27 +267,30 @@ impl Image {
             path: path.into(),
             message: e.to_string(),
         };
+        if self.data.len() != self.width as usize * self.height as usize {
+            return Err(ImageError::Encode {
+                path: path.into(),
+                message: format!(
+                    "{} pixels do not make a {}×{} image",
+                    self.data.len(),
+                    self.width,
+                    self.height
+                ),
+            });
+        }
         let mut out = std::io::Cursor::new(Vec::new());
-        let img = match format {
-            image::ImageFormat::OpenExr => {
-                let flat: Vec<f32> = self.data.iter().flat_map(|v| v.to_array()).collect();
-                image::Rgb32FImage::from_raw(self.width, self.height, flat)
-                    .map(image::DynamicImage::ImageRgb32F)
-            }
-            _ => image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(ldr))
-                .map(image::DynamicImage::ImageRgb8),
-        };
-        img.ok_or_else(|| ImageError::Encode {
-            path: path.into(),
-            message: format!(
-                "{} pixels do not make a {}×{} image",
-                self.data.len(),
-                self.width,
-                self.height
-            ),
-        })?
-        .write_to(&mut out, format)
-        .map_err(encode_err)?;
+        if format == image::ImageFormat::OpenExr {
+            self.encode_exr(&mut out).map_err(|e| ImageError::Encode {
+                path: path.into(),
+                message: e.to_string(),
+            })?;
+            return Ok(out.into_inner());
+        }
+        let rgb = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(ldr))
+            .expect("the size was checked above");
+        image::DynamicImage::ImageRgb8(rgb)
+            .write_to(&mut out, format)
+            .map_err(encode_err)?;
         Ok(out.into_inner())
     }
 }

@@ -26,6 +26,7 @@
 pub mod atomic;
 pub mod brdf;
 pub mod color;
+pub mod fuzz;
 pub mod image;
 pub mod lpv;
 pub mod metrics;

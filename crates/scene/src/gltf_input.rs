@@ -292,7 +292,7 @@ fn check_accessors(path: &Path, doc: &gltf::Document) -> Result<(), SceneError> 
             }
         }
         if let Some(s) = a.sparse() {
-            let n = s.count() as usize;
+            let n = s.count();
             if n > a.count() {
                 return Err(err(
                     path,
@@ -306,8 +306,8 @@ fn check_accessors(path: &Path, doc: &gltf::Document) -> Result<(), SceneError> 
                 gltf::accessor::sparse::IndexType::U32 => 4,
             };
             let vals = s.values();
-            if !fits(idx.offset() as usize, isz, n, isz, idx.view().length())
-                || !fits(vals.offset() as usize, elem, n, elem, vals.view().length())
+            if !fits(idx.offset(), isz, n, isz, idx.view().length())
+                || !fits(vals.offset(), elem, n, elem, vals.view().length())
             {
                 return Err(err(
                     path,

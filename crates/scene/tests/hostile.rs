@@ -2,6 +2,7 @@
 //! thing each) is refused with a message naming the problem, or loads; and a seeded mutation
 //! fuzzer over the corpus finds no panic.
 
+use lightlab_core::fuzz::Fuzzer;
 use lightlab_scene::gltf_io::import_slice;
 use lightlab_scene::{LoadOptions, Scene, SceneError};
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -204,190 +205,56 @@ fn outside_paths_load_when_allowed() {
     assert!(!e.contains("outside"), "{e}");
 }
 
-/// A small deterministic generator (SplitMix64).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
-
-/// Values that break arithmetic: zero, signs, powers of two around integer widths, huge floats.
-const INTERESTING: &[f64] = &[
-    0.0,
-    -1.0,
-    1.0,
-    3.0,
-    4.0,
-    255.0,
-    256.0,
-    65535.0,
-    65536.0,
-    2147483647.0,
-    4294967295.0,
-    4294967296.0,
-    1e19,
-    -1e19,
-    1e39,
-    1e300,
-    0.5,
-    1e-45,
-];
-
-/// Change one number, key or array somewhere in a JSON document.
-fn mutate_json(v: &mut serde_json::Value, rng: &mut Rng) {
-    use serde_json::Value;
-    let mut node = v;
-    loop {
-        let children = match node {
-            Value::Object(m) => m.len(),
-            Value::Array(a) => a.len(),
-            _ => 0,
-        };
-        if children == 0 || rng.below(4) == 0 {
-            break;
-        }
-        let k = rng.below(children);
-        node = match node {
-            Value::Object(m) => m.values_mut().nth(k).unwrap(),
-            Value::Array(a) => &mut a[k],
-            _ => unreachable!(),
-        };
-    }
-    match (rng.below(6), &mut *node) {
-        (0 | 1, n) => *n = serde_json::json!(INTERESTING[rng.below(INTERESTING.len())]),
-        (2, Value::Object(m)) if !m.is_empty() => {
-            let key = m.keys().nth(rng.below(m.len())).unwrap().clone();
-            m.remove(&key);
-        }
-        (3, Value::Array(a)) if !a.is_empty() => {
-            let x = a[rng.below(a.len())].clone();
-            a.push(x);
-        }
-        (4, Value::String(s)) => {
-            *s = ["../x.bin", "%FF", "data:,", "data:;base64,@@", "/", ""][rng.below(6)].into()
-        }
-        (_, n) => *n = serde_json::json!(rng.below(8) as i64 - 2),
-    }
-}
-
-fn mutate_bytes(b: &mut Vec<u8>, rng: &mut Rng) {
-    let n = b.len().max(1);
-    match rng.below(5) {
-        0 => {
-            let i = rng.below(n);
-            if let Some(x) = b.get_mut(i) {
-                *x ^= 1 << rng.below(8);
-            }
-        }
-        1 => {
-            let i = rng.below(n);
-            if let Some(x) = b.get_mut(i) {
-                *x = [0, 0xff, 0x7f, 0x80, b'"', b'[', b'9'][rng.below(7)];
-            }
-        }
-        2 => b.truncate(rng.below(n)),
-        3 => {
-            let (i, j) = (rng.below(n), rng.below(n));
-            let len = b.len();
-            b.drain(i.min(j).min(len)..i.max(j).min(len));
-        }
-        _ => {
-            let i = rng.below(n).min(b.len());
-            let chunk: Vec<u8> = b[i..(i + 16).min(b.len())].to_vec();
-            b.splice(i..i, chunk);
-        }
-    }
-}
-
 /// The seeded fuzzer: about 52,000 inputs (structured JSON mutations of the .gltf files, byte
 /// mutations of every file, one to three mutations each), each imported under
-/// `catch_unwind`. Any panic fails the test and names the seed and input.
+/// `catch_unwind`. Any panic fails the test and names the input, message and location.
 #[test]
 fn mutated_gltf_never_panics() {
     let (_dir, scene_dir) = workspace();
     let files = corpus();
-    // Fixed by default; LIGHTLAB_FUZZ_SEED and LIGHTLAB_FUZZ_ROUNDS explore further by hand.
-    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<u64>().ok());
-    let rounds = env("LIGHTLAB_FUZZ_ROUNDS").unwrap_or(600);
-    let mut rng = Rng(env("LIGHTLAB_FUZZ_SEED").unwrap_or(0x6c69_6768_746c_6162));
-    let mut panics = vec![];
-    let (mut inputs, mut loaded) = (0usize, 0usize);
-    let start = std::time::Instant::now();
-    // Silence the message of each caught panic on this test's thread (counted below instead);
-    // other threads' panics are reported as usual.
-    static WHERE: std::sync::Mutex<String> = std::sync::Mutex::new(String::new());
-    static FUZZING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        let fuzzing = FUZZING.load(std::sync::atomic::Ordering::Relaxed);
-        if !fuzzing || std::thread::current().name() != Some("mutated_gltf_never_panics") {
-            hook(info)
-        } else if let Some(l) = info.location() {
-            *WHERE.lock().unwrap() = format!("{}:{}", l.file(), l.line());
-        }
-    }));
-    for round in 0..rounds {
+    let mut fuzz = Fuzzer::from_env(600, 0x6c69_6768_746c_6162);
+    for round in 0..fuzz.rounds {
         for (name, bytes) in &files {
-            let structured = name.ends_with(".gltf") && bytes.len() < 100_000;
-            let mut tries = vec![];
-            if structured && let Ok(mut v) = serde_json::from_slice::<serde_json::Value>(bytes) {
-                for _ in 0..=rng.below(3) {
-                    mutate_json(&mut v, &mut rng);
-                }
-                tries.push(serde_json::to_vec(&v).unwrap());
+            let mut inputs = vec![];
+            if name.ends_with(".gltf") && bytes.len() < 100_000 {
+                inputs.extend(fuzz.mutated_json(bytes));
             }
-            let mut b = bytes.clone();
-            for _ in 0..=rng.below(3) {
-                mutate_bytes(&mut b, &mut rng);
-            }
-            tries.push(b);
-            for input in tries {
-                inputs += 1;
-                match load(&scene_dir, name, &input) {
-                    Err(p) => {
-                        let msg = p
-                            .downcast_ref::<String>()
-                            .cloned()
-                            .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
-                            .unwrap_or_default();
-                        let at = WHERE.lock().unwrap().clone();
-                        panics.push(format!("round {round}, {name}: {msg} at {at}"))
-                    }
-                    Ok(Ok(_)) => loaded += 1,
-                    Ok(Err(_)) => {}
-                }
-                if panics.len() == 1 && panics[0].starts_with(&format!("round {round}, {name}")) {
-                    std::fs::write(
-                        std::env::temp_dir().join("lightlab-fuzz-panic.gltf"),
-                        &input,
-                    )
-                    .ok();
-                }
+            inputs.push(fuzz.mutated_bytes(bytes));
+            for input in inputs {
+                let path = scene_dir.join(name);
+                fuzz.run(&format!("round {round}, {name}"), &input, || {
+                    import_slice(&path, &input, LoadOptions::default()).is_ok()
+                });
             }
         }
     }
-    FUZZING.store(false, std::sync::atomic::Ordering::Relaxed);
-    eprintln!(
-        "glTF fuzz: {inputs} inputs, {loaded} loaded, {} panics, {:.1} s",
-        panics.len(),
-        start.elapsed().as_secs_f64()
-    );
-    assert!(inputs as u64 >= rounds * 80, "only {inputs} inputs ran");
-    assert!(
-        panics.is_empty(),
-        "{} of {inputs} inputs panicked (first written to {}): {:?}",
-        panics.len(),
-        std::env::temp_dir()
-            .join("lightlab-fuzz-panic.gltf")
-            .display(),
-        &panics[..panics.len().min(10)]
-    );
+    let min = 80 * fuzz.rounds as usize;
+    fuzz.finish("glTF import", min);
+}
+
+#[test]
+fn a_failed_export_leaves_no_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut scene = lightlab_scene::builtin::builtin("spheres").unwrap();
+    if scene.environment.is_none() {
+        scene.environment = Some(lightlab_scene::Environment {
+            image: lightlab_core::image::Image::from_fn(8, 4, |_, _| glam::Vec3::ONE),
+            intensity: 1.0,
+        });
+    }
+    // The .gltf's name is taken by a folder: nothing may be written beside it (the .bin and
+    // the .env.exr were left behind).
+    let out = dir.path().join("out.gltf");
+    std::fs::create_dir(&out).unwrap();
+    assert!(lightlab_scene::gltf_io::export(&scene, &out).is_err());
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, ["out.gltf"], "left behind: {left:?}");
+    // An environment that cannot be encoded (NaN) fails before anything is written.
+    std::fs::remove_dir(&out).unwrap();
+    scene.environment.as_mut().unwrap().image.data[0].x = f32::NAN;
+    assert!(lightlab_scene::gltf_io::export(&scene, &out).is_err());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
