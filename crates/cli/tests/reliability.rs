@@ -171,3 +171,135 @@ fn bake_folders_refuse_what_they_did_not_write() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("neither empty nor a bake folder"));
     assert_eq!(std::fs::read(mine.join("notes.txt")).unwrap(), b"keep");
 }
+
+fn lightlab(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_lightlab"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn corpus(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scene/tests/corpus")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+#[test]
+fn inputs_that_gave_nan_images_render_or_are_refused_before_any_work() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("o.exr");
+    let o = out.to_str().unwrap();
+    // Zero-length normals: repaired at load; the GPU image is finite (it was NaN, and
+    // lightlab refused to read its own EXR).
+    let file = corpus("zero_normals.gltf");
+    for technique in ["phong", "direct"] {
+        let r = lightlab(&[
+            "render",
+            "--scene",
+            &file,
+            "--technique",
+            technique,
+            "--width",
+            "24",
+            "--spp",
+            "2",
+            "-o",
+            o,
+        ]);
+        assert!(
+            r.status.success(),
+            "{technique}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        let img = lightlab_core::image::Image::read(&out).unwrap();
+        assert!(img.data.iter().all(|v| v.is_finite()) && img.mean().length() > 0.0);
+        std::fs::remove_file(&out).unwrap();
+    }
+    // An environment intensity that overflows f32 once multiplied: refused, nothing written.
+    let sky = tmp.path().join("sky.exr");
+    lightlab_core::image::Image::from_fn(8, 4, |_, _| glam::Vec3::splat(10.0))
+        .write(&sky, Default::default())
+        .unwrap();
+    let r = lightlab(&[
+        "render",
+        "--scene",
+        "spheres",
+        "--technique",
+        "direct",
+        "--env",
+        sky.to_str().unwrap(),
+        "--env-intensity",
+        "3e38",
+        "--width",
+        "8",
+        "-o",
+        o,
+    ]);
+    let e = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{e}");
+    assert!(e.contains("intensity") && e.contains("sky.exr"), "{e}");
+    assert!(!out.exists());
+    // An output folder that does not exist is refused before the render starts.
+    let t0 = Instant::now();
+    let missing = tmp.path().join("no/such/folder/o.png");
+    let r = lightlab(&[
+        "render",
+        "--scene",
+        "cornell",
+        "--technique",
+        "reference",
+        "--width",
+        "512",
+        "--spp",
+        "4096",
+        "-o",
+        missing.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{e}");
+    assert!(e.contains("does not exist"), "{e}");
+    assert!(
+        t0.elapsed() < Duration::from_secs(20),
+        "the render ran before the check"
+    );
+    // An SH folder given to a light-map technique says what it is (a raw serde error before).
+    let sh = tmp.path().join("sh");
+    let b = lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "sh",
+        "--bands",
+        "2",
+        "--transfer-samples",
+        "4",
+        "--texels-per-metre",
+        "4",
+        "--out",
+        sh.to_str().unwrap(),
+    ]);
+    assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
+    let r = lightlab(&[
+        "render",
+        "--scene",
+        "cornell",
+        "--technique",
+        "lightmap",
+        "--baked",
+        sh.to_str().unwrap(),
+        "--width",
+        "8",
+        "-o",
+        o,
+    ]);
+    let e = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("is an SH light-map folder") && e.contains("radiosity|path"),
+        "{e}"
+    );
+}

@@ -399,3 +399,14 @@ fn shade_light(s: Surface, li: GpuLight, v: vec3<f32>) -> vec3<f32> {
     }
     return c * li.color * e;
 }
+
+// `v` normalised, or `fallback` where `v` is (nearly) zero: opposed vertex normals, a flat
+// grey normal-map texel or an edge-on derivative frame would otherwise normalise to NaN and
+// spread through the frame.
+fn safe_normalize(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let l2 = dot(v, v);
+    if l2 > 1e-24 {
+        return normalize(v);
+    }
+    return fallback;
+}

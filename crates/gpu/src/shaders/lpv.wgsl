@@ -124,7 +124,7 @@ fn rsm_fs(in: RsmVertex) -> RsmTexel {
             flux_in = light.color * c * solid;
         }
     }
-    var n = normalize(in.normal);
+    var n = safe_normalize(in.normal, to_light);
     if dot(n, to_light) < 0.0 {
         n = -n;
     }
@@ -202,7 +202,7 @@ fn inject_cs(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let nrm = textureLoad(rsm_normal, t, 0);
-    let n = normalize(nrm.xyz);
+    let n = safe_normalize(nrm.xyz, vec3<f32>(0.0, 1.0, 0.0));
     if light.kind == 3u {
         // The camera's surfels: blockers of their own half of the geometry atomics.
         if lpv.occlusion == 1u {
@@ -408,7 +408,7 @@ fn inject_wpi_cs(@builtin(global_invocation_id) id: vec3<u32>) {
         if abs(dot(pos.xyz - p, l)) > 0.5 * lpv.cell {
             continue;
         }
-        let n = normalize(textureLoad(rsm_normal, t, 0).xyz);
+        let n = safe_normalize(textureLoad(rsm_normal, t, 0).xyz, -l);
         let e = textureLoad(rsm_flux, t, 0).rgb / pos.w;
         let lobe = sh_basis(reflect(l, n)) + WPI_TRANSMIT * sh_basis(l);
         acc[0] += lobe * e.r;

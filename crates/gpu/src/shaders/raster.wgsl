@@ -73,7 +73,7 @@ fn alpha_test(in: VertexOut) {
 
 // The interpolated vertex normal, turned to the fragment's side (the normal map's base).
 fn vertex_normal(in: VertexOut, front: bool) -> vec3<f32> {
-    let n = normalize(in.normal);
+    let n = safe_normalize(in.normal, vec3<f32>(0.0, 1.0, 0.0));
     return select(-n, n, front);
 }
 
@@ -89,28 +89,28 @@ fn surface(in: VertexOut, front: bool) -> Surface {
         roughness *= t.y;
         metallic *= t.z;
     }
-    var ng = normalize(cross(dpdx(in.world), dpdy(in.world)));
     let v = frame.camera_pos - in.world;
+    var ng = safe_normalize(cross(dpdx(in.world), dpdy(in.world)), safe_normalize(v, vec3<f32>(0.0, 1.0, 0.0)));
     if dot(ng, v) < 0.0 {
         ng = -ng;
     }
-    var n = normalize(in.normal);
+    var n = safe_normalize(in.normal, ng);
     if !front {
         n = -n;
     }
     if (material.flags & 4u) != 0u {
         let t = textureSample(normal_tex, tex_sampler, uv_for(2u, in)).xyz * 2.0 - 1.0;
-        let tn = normalize(vec3<f32>(t.xy * material.normal_scale, t.z));
+        let tn = safe_normalize(vec3<f32>(t.xy * material.normal_scale, t.z), vec3<f32>(0.0, 0.0, 1.0));
         var tg = in.tangent.xyz - n * dot(in.tangent.xyz, n);
         if dot(tg, tg) > 1e-12 {
             tg = normalize(tg);
             let bt = cross(n, tg) * in.tangent.w;
-            n = normalize(tg * tn.x + bt * tn.y + n * tn.z);
+            n = safe_normalize(tg * tn.x + bt * tn.y + n * tn.z, n);
         }
     }
     // Interpolated normals can face away from the viewer at silhouettes: keep them in front.
     if dot(n, v) < 0.0 {
-        n = normalize(n - ng * (dot(n, ng) - 1e-3));
+        n = safe_normalize(n - ng * (dot(n, ng) - 1e-3), ng);
     }
     s.n = n;
     s.ng = ng;
@@ -399,7 +399,7 @@ fn gbuffer_surface(c: vec2<i32>) -> Surface {
     let n = textureLoad(gb_normal, c, 0);
     let sp = textureLoad(gb_specular, c, 0);
     s.p = textureLoad(gb_position, c, 0).xyz + frame.camera_pos;
-    s.n = normalize(n.xyz);
+    s.n = safe_normalize(n.xyz, vec3<f32>(0.0, 1.0, 0.0));
     s.ng = s.n;
     s.diffuse = d.rgb;
     s.f0d = d.a;
