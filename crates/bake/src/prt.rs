@@ -264,7 +264,7 @@ fn gather_point(
                 if !front && !mat.double_sided {
                     continue;
                 }
-                let uv0 = crate::view::hit_uv0(mesh, tri, h.bary);
+                let uv0 = crate::view::hit_uv(mesh, tri, h.bary);
                 // Luminance-free: a scalar transfer carries the albedo's mean (the RGB split is
                 // left to the albedo applied at shading time of the receiver).
                 let rho = albedo(scene, mesh.material, uv0).element_sum() / 3.0;
@@ -678,7 +678,7 @@ pub fn render_sh_lightmaps(
         let mut t = vec![0.0f32; nc];
         sl.sample(h.page, h.uv, &mut t);
         let l = light.at(h.instance, h.p);
-        Some(albedo(scene, h.material, h.uv0) * shade(&t, &l).max(Vec3::ZERO))
+        Some(albedo(scene, h.material, h.tex_uv) * shade(&t, &l).max(Vec3::ZERO))
     })
 }
 
@@ -709,7 +709,7 @@ pub fn render_vertex_transfer(
             let p = inst.transform.transform_point3(mesh.positions[v]);
             e += *wk * shade(&vt.instances[ii][v * nc..(v + 1) * nc], &light.at(ii, p));
         }
-        let uv0 = crate::view::hit_uv0(mesh, tri, h.bary);
+        let uv0 = crate::view::hit_uv(mesh, tri, h.bary);
         Some(albedo(scene, mesh.material, uv0) * e.max(Vec3::ZERO))
     })
 }

@@ -319,7 +319,7 @@ pub fn render_compressed(
             .zip(&relit[g])
             .map(|(wk, r)| *wk * c.shade(h.page, h.uv, r, filter))
             .sum();
-        Some(crate::texels::albedo(scene, h.material, h.uv0) * e.max(glam::Vec3::ZERO))
+        Some(crate::texels::albedo(scene, h.material, h.tex_uv) * e.max(glam::Vec3::ZERO))
     })
 }
 

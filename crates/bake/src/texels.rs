@@ -190,11 +190,7 @@ fn sample(
     let dpdx = (e1w * e2q.y - e2w * e1q.y) / det;
     let dpdy = (e2w * e1q.x - e1w * e2q.x) / det;
     let ns = shading_normal(mesh, inst.normal_matrix(), idx, bw, ng);
-    let uv = if mesh.uv0.len() == mesh.positions.len() {
-        mesh.uv0[idx[0]] * bw[0] + mesh.uv0[idx[1]] * bw[1] + mesh.uv0[idx[2]] * bw[2]
-    } else {
-        Vec2::ZERO
-    };
+    let uv = mesh.uv_at(idx, bw);
     let mat = &scene.materials[mesh.material];
     TexelSample {
         p,
@@ -270,7 +266,7 @@ pub fn normal_mapped_normal(
         let u = rng.next_vec2() - Vec2::splat(0.5);
         let b = t.bary + t.dbdx * u.x + t.dbdy * u.y;
         let bw = [1.0 - b.x - b.y, b.x, b.y];
-        let uv = mesh.uv0[idx[0]] * bw[0] + mesh.uv0[idx[1]] * bw[1] + mesh.uv0[idx[2]] * bw[2];
+        let uv = mesh.uv_at(idx, bw);
         let ns = shading_normal(mesh, nm, idx, bw, t.ng);
         sum += lightlab_trace::render::normal_mapped(scene, inst, mesh, idx, bw, uv, ns, t.ng);
     }
@@ -278,15 +274,15 @@ pub fn normal_mapped_normal(
 }
 
 /// Diffuse reflectance of a material at a UV: (1−metallic)·base colour (× textures).
-pub fn albedo(scene: &Scene, material: usize, uv: Vec2) -> Vec3 {
+pub fn albedo(scene: &Scene, material: usize, uv: lightlab_scene::Uv) -> Vec3 {
     let m = &scene.materials[material];
     let mut base = m.base_color;
     if let Some(r) = m.base_color_texture {
-        base *= scene.textures[r.texture].sample(uv);
+        base *= scene.sample(r, uv);
     }
     let mut metallic = m.metallic;
     if let Some(r) = m.metallic_roughness_texture {
-        metallic *= scene.textures[r.texture].sample(uv).z;
+        metallic *= scene.sample(r, uv).z;
     }
     base.truncate() * (1.0 - metallic)
 }

@@ -32,7 +32,8 @@ pub struct LightmapHit {
     pub uv: Vec2,
     pub p: Vec3,
     pub material: usize,
-    pub uv0: Vec2,
+    /// The texture coordinates (both sets) at the hit.
+    pub tex_uv: lightlab_scene::Uv,
     /// Whether the camera sees the front side.
     pub front: bool,
 }
@@ -56,7 +57,7 @@ pub fn layout_hit(
     let rect = layout.instances[hit.prim.instance as usize]?;
     let tri = hit.prim.triangle as usize;
     let u1 = interpolate(mesh.uv1.as_ref()?, mesh, tri, hit.bary);
-    let uv0 = hit_uv0(mesh, tri, hit.bary);
+    let tex_uv = hit_uv(mesh, tri, hit.bary);
     let w = accel.world_triangle(hit.slot);
     let ng = (w[1] - w[0]).cross(w[2] - w[0]);
     Some(LightmapHit {
@@ -65,7 +66,7 @@ pub fn layout_hit(
         uv: rect.page_uv(u1),
         p: o + d * hit.t,
         material: mesh.material,
-        uv0,
+        tex_uv,
         front: ng.dot(d) < 0.0,
     })
 }
@@ -79,13 +80,10 @@ pub fn interpolate(values: &[Vec2], mesh: &Mesh, tri: usize, bary: Vec2) -> Vec2
         .sum()
 }
 
-/// TEXCOORD_0 at a hit (zero for meshes without it).
-pub fn hit_uv0(mesh: &Mesh, tri: usize, bary: Vec2) -> Vec2 {
-    if mesh.uv0.len() == mesh.positions.len() {
-        interpolate(&mesh.uv0, mesh, tri, bary)
-    } else {
-        Vec2::ZERO
-    }
+/// Both texture-coordinate sets at a hit (zero for meshes without UVs).
+pub fn hit_uv(mesh: &Mesh, tri: usize, bary: Vec2) -> lightlab_scene::Uv {
+    let idx = [0, 1, 2].map(|k| mesh.indices[tri * 3 + k] as usize);
+    mesh.uv_at(idx, [1.0 - bary.x - bary.y, bary.x, bary.y])
 }
 
 /// Render `scene` from camera `camera` with `spp` jittered samples per pixel: `radiance`
@@ -158,9 +156,9 @@ pub fn render(
     render_camera(scene, width, height, camera, spp, |accel, o, d| {
         let h = lightmap_hit(lm, accel, o, d)?;
         let mat = &scene.materials[h.material];
-        let mut c = albedo(scene, h.material, h.uv0) * sample(lm, h.page, h.uv, filter);
+        let mut c = albedo(scene, h.material, h.tex_uv) * sample(lm, h.page, h.uv, filter);
         if mat.is_emissive() && (h.front || mat.double_sided) {
-            c += emission(scene, h.material, h.uv0);
+            c += emission(scene, h.material, h.tex_uv);
         }
         Some(c)
     })

@@ -42,6 +42,36 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// Both UV sets at barycentric weights `bw` of the triangle `idx` (zeros where the mesh
+    /// has no UV0).
+    pub fn uv_at(&self, idx: [usize; 3], bw: [f32; 3]) -> Uv {
+        let lerp = |uv: &[Vec2]| {
+            if uv.len() == self.positions.len() {
+                uv[idx[0]] * bw[0] + uv[idx[1]] * bw[1] + uv[idx[2]] * bw[2]
+            } else {
+                Vec2::ZERO
+            }
+        };
+        let uv0 = lerp(&self.uv0);
+        let uv1 = self.uv1.as_deref().map_or(uv0, lerp);
+        Uv([uv0, uv1])
+    }
+
+    /// The UVs of triangle `t`'s corners in set `set` (zeros where the mesh has none).
+    pub fn corner_uvs(&self, t: &[u32], set: u32) -> [Vec2; 3] {
+        let uv = match (set, &self.uv1) {
+            (1, Some(uv1)) => uv1,
+            _ => &self.uv0,
+        };
+        [t[0], t[1], t[2]].map(|i| uv.get(i as usize).copied().unwrap_or_default())
+    }
+
+    /// Both UV sets of triangle `t`'s corners.
+    pub fn corners(&self, t: &[u32]) -> [Uv; 3] {
+        let (a, b) = (self.corner_uvs(t, 0), self.corner_uvs(t, 1));
+        [0, 1, 2].map(|k| Uv([a[k], b[k]]))
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
@@ -131,6 +161,24 @@ pub enum AlphaMode {
     Mask { cutoff: f32 },
     /// Blended. The CPU reference treats it as stochastic coverage.
     Blend,
+}
+
+/// The texture coordinates of a surface point in both sets, TEXCOORD_0 and TEXCOORD_1 (the
+/// second repeats the first where a mesh has none). Every texture read picks its set through
+/// [`Scene::sample`], so the path tracer, the bakers and the GPU read the same texels.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Uv(pub [Vec2; 2]);
+
+impl Uv {
+    /// The coordinates of set `set` (0 or 1).
+    pub fn set(&self, set: u32) -> Vec2 {
+        self.0[set.min(1) as usize]
+    }
+
+    /// The barycentric combination of three corners' coordinates.
+    pub fn weighted(c: &[Uv; 3], bw: [f32; 3]) -> Uv {
+        Uv([0, 1].map(|k| c[0].0[k] * bw[0] + c[1].0[k] * bw[1] + c[2].0[k] * bw[2]))
+    }
 }
 
 /// A reference to a texture with the UV set it uses.
@@ -458,6 +506,11 @@ impl Camera {
 }
 
 impl Scene {
+    /// Texture `r` at the surface point with coordinates `uv`, in the set `r` names.
+    pub fn sample(&self, r: TextureRef, uv: Uv) -> Vec4 {
+        self.textures[r.texture].sample(uv.set(r.uv_set))
+    }
+
     /// Shade every material with `model` (the `--brdf` override of the command line).
     pub fn set_brdf(&mut self, model: BrdfModel) {
         for m in &mut self.materials {

@@ -160,8 +160,10 @@ impl Accel {
                     instance: ii as u32,
                     triangle: ti as u32,
                 });
+                // The corners' UVs in the set the base colour texture reads.
+                let set = mat.base_color_texture.map_or(0, |r| r.uv_set);
                 alpha_of.push(cutoff.map(|cutoff| AlphaTri {
-                    uv: [t[0], t[1], t[2]].map(|i| mesh.uv0[i as usize]),
+                    uv: mesh.corner_uvs(t, set),
                     texture: mat.base_color_texture.map(|r| r.texture as u32),
                     base_alpha: mat.base_color.w,
                     cutoff,

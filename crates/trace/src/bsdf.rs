@@ -53,21 +53,21 @@ impl Bsdf {
     }
 
     /// The BSDF of `material` at texture coordinate `uv`, seen from local direction `wo`.
-    pub fn new(scene: &Scene, material: &Material, uv: Vec2, wo_z: f32) -> Bsdf {
+    pub fn new(scene: &Scene, material: &Material, uv: lightlab_scene::Uv, wo_z: f32) -> Bsdf {
         let mut base = material.base_color;
         if let Some(r) = material.base_color_texture {
-            base *= scene.textures[r.texture].sample(uv);
+            base *= scene.sample(r, uv);
         }
         let (mut metallic, mut roughness) = (material.metallic, material.roughness);
         if let Some(r) = material.metallic_roughness_texture {
-            let t: Vec4 = scene.textures[r.texture].sample(uv);
+            let t: Vec4 = scene.sample(r, uv);
             roughness *= t.y;
             metallic *= t.z;
         }
         let base = base.truncate();
         let mut transmission = material.transmission;
         if let Some(r) = material.transmission_texture {
-            transmission *= scene.textures[r.texture].sample(uv).w;
+            transmission *= scene.sample(r, uv).w;
         }
         let f0d = 0.04 * material.specular;
         let f0 = Vec3::splat(f0d).lerp(base, metallic);
@@ -220,7 +220,7 @@ mod tests {
     use lightlab_core::sampling::{Rng, uniform_sphere};
 
     fn bsdf(m: Material, wo_z: f32) -> Bsdf {
-        Bsdf::new(&Scene::default(), &m, Vec2::ZERO, wo_z)
+        Bsdf::new(&Scene::default(), &m, lightlab_scene::Uv::default(), wo_z)
     }
 
     #[test]

@@ -14,7 +14,7 @@ use std::f32::consts::PI;
 #[derive(Clone, Debug)]
 pub struct EmitTri {
     pub p: [Vec3; 3],
-    pub uv: [Vec2; 3],
+    pub uv: [lightlab_scene::Uv; 3],
     /// Unit normal of the authored (front) side.
     pub n: Vec3,
     pub area: f32,
@@ -45,11 +45,11 @@ pub struct LightSample {
 }
 
 /// Emitted radiance of a material at `uv` (emissive texture applied).
-pub fn emission(scene: &Scene, material: usize, uv: Vec2) -> Vec3 {
+pub fn emission(scene: &Scene, material: usize, uv: lightlab_scene::Uv) -> Vec3 {
     let m = &scene.materials[material];
     let mut e = m.emission();
     if let Some(r) = m.emissive_texture {
-        e *= scene.textures[r.texture].sample(uv).truncate();
+        e *= scene.sample(r, uv).truncate();
     }
     e
 }
@@ -71,7 +71,7 @@ impl LightSet {
                 let c = (p[1] - p[0]).cross(p[2] - p[0]);
                 emitters.push(EmitTri {
                     p,
-                    uv: [t[0], t[1], t[2]].map(|i| mesh.uv0[i as usize]),
+                    uv: mesh.corners(t),
                     n: c.normalize_or_zero(),
                     area: 0.5 * c.length(),
                     material: mesh.material,
@@ -151,7 +151,7 @@ impl LightSet {
         if cos_l <= 0.0 && !e.double_sided {
             return None;
         }
-        let uv = e.uv[0] * (1.0 - b.x - b.y) + e.uv[1] * b.x + e.uv[2] * b.y;
+        let uv = lightlab_scene::Uv::weighted(&e.uv, [1.0 - b.x - b.y, b.x, b.y]);
         let le = emission(scene, e.material, uv);
         let pdf = p_sel / e.area * dist2 / cos_l.abs().max(1e-8);
         Some(LightSample {

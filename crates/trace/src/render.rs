@@ -19,7 +19,7 @@ use crate::lights::{LightSet, emission, sample_punctual};
 use glam::{Mat3, Vec2, Vec3};
 use lightlab_core::image::Image;
 use lightlab_core::sampling::{Frame, Rng, power_heuristic};
-use lightlab_scene::{Camera, Scene};
+use lightlab_scene::{Camera, Scene, Uv};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
@@ -106,7 +106,8 @@ pub struct Surface {
     pub ng: Vec3,
     /// Interpolated (and normal-mapped) shading normal, on the front side.
     pub ns: Vec3,
-    pub uv: Vec2,
+    /// Both texture-coordinate sets (each texture read picks its own).
+    pub uv: Uv,
     pub material: usize,
 }
 
@@ -130,7 +131,7 @@ pub fn surface(scene: &Scene, accel: &Accel, hit: &Hit) -> Surface {
         // Mirrored transforms or inconsistent authored normals: follow the geometry.
         ns = -ns;
     }
-    let uv = mesh.uv0[idx[0]] * b0 + mesh.uv0[idx[1]] * b1 + mesh.uv0[idx[2]] * b2;
+    let uv = mesh.uv_at(idx, [b0, b1, b2]);
     let material = mesh.material;
     let ns = normal_mapped(scene, inst, mesh, idx, [b0, b1, b2], uv, ns, ng);
     Surface {
@@ -154,7 +155,7 @@ pub fn normal_mapped(
     mesh: &lightlab_scene::Mesh,
     idx: [usize; 3],
     bw: [f32; 3],
-    uv: glam::Vec2,
+    uv: Uv,
     ns: Vec3,
     ng: Vec3,
 ) -> Vec3 {
@@ -174,7 +175,7 @@ pub fn normal_mapped(
         return ns;
     }
     let bw = ns.cross(tw) * if tg.w < 0.0 { -1.0 } else { 1.0 };
-    let s = scene.textures[r.texture].sample(uv).truncate() * 2.0 - Vec3::ONE;
+    let s = scene.sample(r, uv).truncate() * 2.0 - Vec3::ONE;
     let s = Vec3::new(s.x * mat.normal_scale, s.y * mat.normal_scale, s.z);
     let mapped = (tw * s.x + bw * s.y + ns * s.z).normalize_or(ns);
     if mapped.dot(ng) > 0.0 { mapped } else { ns }
@@ -286,7 +287,7 @@ impl<'a> PathTracer<'a> {
                     p,
                     ng,
                     ns,
-                    uv: Vec2::ZERO,
+                    uv: Uv::default(),
                     material: usize::MAX,
                 };
                 let wo_l = Vec3::Z;
