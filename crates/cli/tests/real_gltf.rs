@@ -1,0 +1,118 @@
+//! glTF files as other tools write them: the reference and the GPU read them alike.
+
+use glam::{Vec2, Vec3, Vec4};
+use lightlab_scene::{Scene, Texture, TextureRef};
+use std::path::Path;
+use std::process::Command;
+
+fn lightlab(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_lightlab"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(o: &std::process::Output) -> String {
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{e}");
+    e
+}
+
+fn relmse(a: &Path, b: &Path) -> f64 {
+    let o = lightlab(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--json",
+    ]);
+    ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let v: serde_json::Value = serde_json::from_str(out.lines().last().unwrap()).unwrap();
+    v["relmse"].as_f64().unwrap()
+}
+
+/// `shadows` with a checker on the floor read through TEXCOORD_1, while TEXCOORD_0 is all
+/// zeros (a single texel): a reader that ignores `texCoord` sees a plain floor.
+fn checker_on_uv1() -> Scene {
+    let mut s = lightlab_scene::builtin::builtin("shadows").unwrap();
+    let checker = Texture {
+        name: "checker".into(),
+        width: 8,
+        height: 8,
+        data: (0..64)
+            .map(|i| {
+                let c = if (i % 8 + i / 8) % 2 == 0 { 0.9 } else { 0.05 };
+                Vec4::new(c, c * 0.8, c * 0.6, 1.0)
+            })
+            .collect(),
+        srgb: true,
+    };
+    s.textures.push(checker);
+    let floor = s.meshes.iter().position(|m| m.name == "floor").unwrap();
+    let mesh = &mut s.meshes[floor];
+    mesh.uv1 = Some(
+        mesh.positions
+            .iter()
+            .map(|p| Vec2::new(p.x, p.z) / 7.0 + Vec2::splat(0.5))
+            .collect(),
+    );
+    mesh.uv0 = vec![Vec2::ZERO; mesh.positions.len()];
+    let m = mesh.material;
+    s.materials[m].base_color = Vec4::ONE;
+    s.materials[m].base_color_texture = Some(TextureRef {
+        texture: s.textures.len() - 1,
+        uv_set: 1,
+    });
+    s
+}
+
+#[test]
+fn a_texture_on_texcoord_1_renders_alike_in_the_reference_and_on_the_gpu() {
+    let tmp = tempfile::tempdir().unwrap();
+    let glb = tmp.path().join("checker.glb");
+    lightlab_scene::gltf_io::export(&checker_on_uv1(), &glb).unwrap();
+    let (direct, gpu) = (tmp.path().join("direct.exr"), tmp.path().join("gpu.exr"));
+    let g = glb.to_str().unwrap();
+    ok(&lightlab(&[
+        "render",
+        "--scene",
+        g,
+        "--technique",
+        "direct",
+        "--width",
+        "96",
+        "--spp",
+        "64",
+        "-o",
+        direct.to_str().unwrap(),
+    ]));
+    ok(&lightlab(&[
+        "render",
+        "--scene",
+        g,
+        "--technique",
+        "phong-shadow-maps",
+        "--width",
+        "96",
+        "-o",
+        gpu.to_str().unwrap(),
+    ]));
+    let e = relmse(&gpu, &direct);
+    eprintln!("checker on TEXCOORD_1: phong-shadow-maps against direct, relMSE {e:.4}");
+    assert!(e <= 0.01, "relMSE {e}");
+    // The checker is there: the floor's pixels vary far more than a plain floor's.
+    let img = lightlab_core::image::Image::read(&direct).unwrap();
+    let lum: Vec<f32> = img
+        .data
+        .iter()
+        .map(|v| v.dot(Vec3::splat(1.0 / 3.0)))
+        .collect();
+    let bottom = &lum[lum.len() * 3 / 4..];
+    let mean = bottom.iter().sum::<f32>() / bottom.len() as f32;
+    let var = bottom.iter().map(|l| (l - mean).powi(2)).sum::<f32>() / bottom.len() as f32;
+    assert!(
+        var.sqrt() > 0.3 * mean,
+        "no checker in the reference: σ {} mean {mean}",
+        var.sqrt()
+    );
+}
