@@ -302,6 +302,7 @@ mod tests {
             lights,
             environment: None,
             cameras: vec![],
+            warnings: vec![],
         }
     }
 

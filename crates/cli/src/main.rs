@@ -192,8 +192,13 @@ pub fn gpu_context() -> Result<lightlab_gpu::GpuContext> {
     Ok(ctx)
 }
 
+/// Load a scene and print what loading dropped or changed as warnings.
 pub fn load_scene(spec: &str, load: &options::LoadArgs) -> Result<lightlab_scene::Scene> {
-    Ok(lightlab_scene::load(spec, load.options())?)
+    let scene = lightlab_scene::load(spec, load.options())?;
+    for w in &scene.warnings {
+        eprintln!("lightlab: warning: {spec}: {w}");
+    }
+    Ok(scene)
 }
 
 fn run(cli: Cli) -> Result<()> {

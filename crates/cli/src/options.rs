@@ -20,8 +20,12 @@ use std::path::PathBuf;
 /// How a glTF scene is loaded (every command that takes `--scene`).
 #[derive(Args, Clone, Copy, Debug, Default)]
 pub struct LoadArgs {
-    /// Drop zero-area triangles of glTF input instead of rejecting the file.
+    /// Refuse glTF input that loading would otherwise repair with a warning (degenerate
+    /// triangles are dropped, point and line primitives skipped).
     #[arg(long)]
+    pub strict: bool,
+    /// Accepted for older scripts: dropping degenerate triangles is the default now.
+    #[arg(long, hide = true)]
     pub drop_degenerate: bool,
     /// Let the glTF's buffer, image and environment URIs name files outside its folder
     /// (absolute paths, `file:` URIs, `../`).
@@ -32,7 +36,7 @@ pub struct LoadArgs {
 impl LoadArgs {
     pub fn options(&self) -> lightlab_scene::LoadOptions {
         lightlab_scene::LoadOptions {
-            drop_degenerate: self.drop_degenerate,
+            strict: self.strict,
             allow_outside_paths: self.allow_outside_paths,
         }
     }

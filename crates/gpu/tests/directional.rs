@@ -83,6 +83,7 @@ fn ridged_floor(tilt: f32) -> Scene {
             0.9,
         )],
         environment: None,
+        warnings: vec![],
     }
 }
 

@@ -71,6 +71,7 @@ pub fn import_slice(path: &Path, bytes: &[u8], opts: LoadOptions) -> Result<Scen
         scene: Scene::default(),
         mesh_map: HashMap::new(),
         tex_map: HashMap::new(),
+        skipped: 0,
     }
     .run()?;
     scene.name = path
@@ -211,6 +212,8 @@ struct Importer<'a> {
     mesh_map: HashMap<(usize, usize), usize>,
     /// (glTF image, sRGB) → lightlab texture.
     tex_map: HashMap<(usize, bool), usize>,
+    /// Primitives skipped (points, lines).
+    skipped: usize,
 }
 
 fn extras_json(extras: &gltf::json::Extras) -> Option<Value> {
@@ -258,7 +261,9 @@ impl Importer<'_> {
                         .primitives()
                         .next()
                         .ok_or_else(|| bad(format!("detail source mesh {src} has no primitive")))?;
-                    let m = self.primitive(&src_mesh, &prim, default_material)?;
+                    let m = self
+                        .primitive(&src_mesh, &prim, default_material)?
+                        .ok_or_else(|| bad(format!("detail source mesh {src} is not triangles")))?;
                     self.scene.meshes.push(m);
                     let s = self.scene.meshes.len() - 1;
                     self.mesh_map.insert(key, s);
@@ -283,6 +288,12 @@ impl Importer<'_> {
             .or_else(|| self.doc.scenes().next())
             .ok_or_else(|| gltf_err(self.path, "the file contains no scene"))?;
         self.nodes(&gscene, default_material)?;
+        if self.skipped > 0 {
+            self.scene.warnings.push(format!(
+                "skipped {} primitive instance(s) of points or lines (lightlab renders triangles)",
+                self.skipped
+            ));
+        }
         self.detail_sources(default_material)?;
         if self
             .scene
@@ -468,7 +479,10 @@ impl Importer<'_> {
                 let id = match self.mesh_map.get(&key) {
                     Some(&id) => id,
                     None => {
-                        let m = self.primitive(&mesh, &prim, default_material)?;
+                        let Some(m) = self.primitive(&mesh, &prim, default_material)? else {
+                            self.skipped += 1;
+                            continue;
+                        };
                         self.scene.meshes.push(m);
                         let id = self.scene.meshes.len() - 1;
                         self.mesh_map.insert(key, id);
@@ -566,12 +580,14 @@ impl Importer<'_> {
         Ok(())
     }
 
+    /// One primitive as a triangle mesh; None for points and lines (skipped, and counted by
+    /// the caller).
     fn primitive(
         &self,
         mesh: &gltf::Mesh,
         prim: &gltf::Primitive,
         default_material: usize,
-    ) -> Result<Mesh, SceneError> {
+    ) -> Result<Option<Mesh>, SceneError> {
         let name = match (mesh.name(), mesh.primitives().len()) {
             (Some(n), 1) => n.to_string(),
             (Some(n), _) => format!("{n}.{}", prim.index()),
@@ -582,11 +598,16 @@ impl Importer<'_> {
             mesh: name.clone(),
             problem: problem.into(),
         };
-        if prim.mode() != gltf::mesh::Mode::Triangles {
-            return Err(geo(&format!(
-                "primitive mode {:?} is not supported (only TRIANGLES)",
-                prim.mode()
-            )));
+        use gltf::mesh::Mode;
+        match prim.mode() {
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => {}
+            mode if self.opts.strict => {
+                return Err(geo(&format!(
+                    "primitive mode {mode:?} is not triangles (without --strict such \
+                     primitives are skipped with a warning)"
+                )));
+            }
+            _ => return Ok(None),
         }
         let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
         let positions: Vec<Vec3> = reader
@@ -609,11 +630,12 @@ impl Importer<'_> {
         let uv1 = reader
             .read_tex_coords(1)
             .map(|t| t.into_f32().map(Vec2::from_array).collect());
-        let indices = match reader.read_indices() {
+        let indices: Vec<u32> = match reader.read_indices() {
             Some(i) => i.into_u32().collect(),
             None => (0..positions.len() as u32).collect(),
         };
-        Ok(Mesh {
+        let indices = triangle_list(prim.mode(), indices);
+        Ok(Some(Mesh {
             name,
             positions,
             normals,
@@ -623,7 +645,29 @@ impl Importer<'_> {
             indices,
             material: prim.material().index().unwrap_or(default_material),
             detail_source: None,
-        })
+        }))
+    }
+}
+
+/// The triangles of a primitive as a list: strips and fans converted, with the winding of
+/// glTF's definition (strip triangle i: i, i+1, i+2 with odd i swapped; fan: 0, i+1, i+2).
+fn triangle_list(mode: gltf::mesh::Mode, idx: Vec<u32>) -> Vec<u32> {
+    use gltf::mesh::Mode;
+    let n = idx.len().saturating_sub(2);
+    match mode {
+        Mode::TriangleStrip => (0..n)
+            .flat_map(|i| {
+                if i % 2 == 0 {
+                    [idx[i], idx[i + 1], idx[i + 2]]
+                } else {
+                    [idx[i + 1], idx[i], idx[i + 2]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (0..n)
+            .flat_map(|i| [idx[0], idx[i + 1], idx[i + 2]])
+            .collect(),
+        _ => idx,
     }
 }
 

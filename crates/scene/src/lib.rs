@@ -65,8 +65,9 @@ impl From<lightlab_core::image::ImageError> for SceneError {
 /// Options of scene loading.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LoadOptions {
-    /// Drop zero-area triangles instead of rejecting the file.
-    pub drop_degenerate: bool,
+    /// Refuse a file with anything loading would otherwise drop with a warning: degenerate
+    /// triangles, primitives that are not triangles.
+    pub strict: bool,
     /// Let buffer, image and environment URIs name files outside the glTF file's folder
     /// (absolute paths, `file:` URIs, `../`); refused by default (see [`gltf_input`]).
     pub allow_outside_paths: bool,

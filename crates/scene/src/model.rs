@@ -20,6 +20,9 @@ pub struct Scene {
     pub environment: Option<Environment>,
     /// The first camera is the scene's default camera.
     pub cameras: Vec<Camera>,
+    /// What loading dropped or changed, one line each (degenerate triangles dropped, primitives
+    /// skipped, …); the command line prints them as warnings.
+    pub warnings: Vec<String>,
 }
 
 /// An indexed triangle mesh with one material (a glTF primitive).

@@ -1,8 +1,8 @@
 //! Scene checks: every problem becomes a [`SceneError`] naming the file and the mesh.
 //!
 //! Checked: finite positions/normals/UVs/transforms, index bounds, index count a multiple of
-//! three, attribute lengths, zero-area triangles (an error unless
-//! [`LoadOptions::drop_degenerate`](crate::LoadOptions) is set, then they are removed), material
+//! three, attribute lengths, degenerate triangles (dropped with a warning in
+//! [`Scene::warnings`], an error with [`LoadOptions::strict`](crate::LoadOptions)), material
 //! and texture references, light parameters, camera field of view.
 //!
 //! Meshes without normals get flat-shaded normals (the glTF specification requires exactly
@@ -15,6 +15,10 @@ use std::path::Path;
 /// The largest world coordinate a scene may have [m]: far beyond any real scene, and far
 /// enough below f32's range that bounding boxes, their areas and ray intersections stay finite.
 pub const MAX_COORDINATE: f32 = 1e15;
+
+/// A triangle is degenerate when twice its area is at most this fraction of its mesh's
+/// bounding-box diagonal squared (1e-12: a 10 m mesh's triangles under ≈ 0.05 mm²).
+pub const DEGENERATE_AREA: f32 = 1e-12;
 
 /// Validate (and where allowed, repair) a scene loaded from `path`.
 pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(), SceneError> {
@@ -170,30 +174,45 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
                 "TEXCOORD_1 is inconsistent or not finite".into(),
             ));
         }
-        // Zero-area triangles.
-        let area2 = |t: &[u32]| {
-            let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
-            (b - a).cross(c - a).length()
+        // Degenerate triangles: a repeated index, or an area below a tiny fraction of the
+        // mesh's own size (relative, so a node's uniform scale does not change the verdict).
+        let (lo, hi) = mesh
+            .positions
+            .iter()
+            .fold((glam::Vec3::MAX, glam::Vec3::MIN), |(l, h), p| {
+                (l.min(*p), h.max(*p))
+            });
+        // A mesh beyond the coordinate limit is refused below for that, not judged here.
+        let extent = (hi - lo).as_dvec3();
+        let floor = if extent.max_element() > MAX_COORDINATE as f64 {
+            0.0
+        } else {
+            DEGENERATE_AREA as f64 * extent.length_squared()
         };
-        let degenerate = mesh
+        let degenerate = |t: &[u32]| {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize].as_dvec3());
+            t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || (b - a).cross(c - a).length() <= floor
+        };
+        let count = mesh
             .indices
             .chunks_exact(3)
-            .filter(|t| area2(t) <= 1e-12)
+            .filter(|t| degenerate(t))
             .count();
-        if degenerate > 0 {
-            if !opts.drop_degenerate {
+        if count > 0 {
+            let total = mesh.indices.len() / 3;
+            if opts.strict {
                 return Err(geo(
                     &name,
                     format!(
-                        "{degenerate} of {} triangles have zero area (use --drop-degenerate to drop them)",
-                        mesh.indices.len() / 3
+                        "{count} of {total} triangles are degenerate (zero area); without \
+                         --strict they are dropped with a warning"
                     ),
                 ));
             }
             let kept: Vec<u32> = mesh
                 .indices
                 .chunks_exact(3)
-                .filter(|t| area2(t) > 1e-12)
+                .filter(|t| !degenerate(t))
                 .flatten()
                 .copied()
                 .collect();
@@ -201,6 +220,9 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
                 return Err(geo(&name, "all triangles have zero area".into()));
             }
             mesh.indices = kept;
+            scene.warnings.push(format!(
+                "mesh '{name}': dropped {count} of {total} degenerate (zero-area) triangles"
+            ));
         }
         if mesh.normals.is_empty() {
             mesh.compute_normals();

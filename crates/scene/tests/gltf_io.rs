@@ -404,7 +404,7 @@ fn coordinates_too_far_from_the_origin_are_rejected() {
 }
 
 #[test]
-fn degenerate_triangles_are_rejected_or_dropped_on_request() {
+fn degenerate_triangles_are_dropped_or_refused_with_strict() {
     let dir = tempfile::tempdir().unwrap();
     let p = triangle_file(
         dir.path(),
@@ -413,18 +413,18 @@ fn degenerate_triangles_are_rejected_or_dropped_on_request() {
         true,
         |_| {},
     );
+    // Dropping (the default) leaves nothing here, which is an error.
     let msg = load_err(&p);
     assert!(msg.contains("zero area") && msg.contains("'tri'"), "{msg}");
-    // Dropping leaves nothing here, which is still an error.
     let e = load(
         p.to_str().unwrap(),
         LoadOptions {
-            drop_degenerate: true,
+            strict: true,
             ..Default::default()
         },
     )
     .unwrap_err();
-    assert!(e.to_string().contains("zero area"));
+    assert!(e.to_string().contains("--strict"), "{e}");
 }
 
 #[test]

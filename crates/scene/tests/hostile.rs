@@ -64,7 +64,7 @@ const EXPECTED: &[(&str, &[&str])] = &[
     ("camera_zero_fov.gltf", &["camera", "field of view"]),
     ("deep_chain.gltf", &["deeper than 1024"]),
     ("deep_json.gltf", &["invalid glTF"]),
-    ("degenerate_triangle.gltf", &["zero area"]),
+    ("degenerate_triangle.gltf", &[]),
     (
         "environment_huge_intensity.gltf",
         &["environment", "intensity"],
@@ -109,7 +109,8 @@ const EXPECTED: &[(&str, &[&str])] = &[
     ("node_self_cycle.gltf", &["reached twice"]),
     ("node_two_parents.gltf", &["reached twice"]),
     ("not_json.gltf", &["invalid glTF"]),
-    ("points_mode.gltf", &["mode Points"]),
+    ("points_beside_triangles.gltf", &[]),
+    ("points_mode.gltf", &["no triangle meshes"]),
     (
         "positions_past_view.gltf",
         &["accessor 0", "run past bufferView 0"],
@@ -123,6 +124,8 @@ const EXPECTED: &[(&str, &[&str])] = &[
         &["byteStride 4", "smaller than its 12-byte"],
     ),
     ("texcoord_set_missing.gltf", &["TEXCOORD_3"]),
+    ("triangle_fan.gltf", &[]),
+    ("triangle_strip.gltf", &[]),
     ("unknown_required_extension.gltf", &["EXT_made_up"]),
     (
         "uri_absolute.gltf",
@@ -159,12 +162,32 @@ fn every_hostile_file_is_refused_with_its_problem_named_or_loads() {
                 wrong.push(format!("{name}: loaded ({} meshes)", scene.meshes.len()))
             }
             Ok(Ok(scene)) => {
-                // Loaded files are sound: unit normals everywhere.
+                // Loaded files are sound: unit normals everywhere, and every triangle (lists,
+                // converted strips and fans) wound to face its normals.
                 for m in &scene.meshes {
                     for n in &m.normals {
                         assert!((n.length() - 1.0).abs() < 1e-4, "{name}: normal {n}");
                     }
+                    let kept = if name == "degenerate_triangle.gltf" {
+                        3
+                    } else {
+                        6
+                    };
+                    assert_eq!(m.indices.len(), kept, "{name}: the quad's triangles");
+                    for t in m.indices.chunks_exact(3) {
+                        let [a, b, c] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
+                        let facing = (b - a).cross(c - a).dot(m.normals[t[0] as usize]);
+                        assert!(facing > 0.0, "{name}: triangle {t:?} is wound backwards");
+                    }
                 }
+                let warned = !scene.warnings.is_empty();
+                let expect = ["degenerate_triangle.gltf", "points_beside_triangles.gltf"];
+                assert_eq!(
+                    warned,
+                    expect.contains(&name.as_str()),
+                    "{name}: {:?}",
+                    scene.warnings
+                );
             }
             Ok(Err(e)) => {
                 let msg = e.to_string();

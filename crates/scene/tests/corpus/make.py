@@ -139,6 +139,19 @@ files["zero_normals.gltf"] = base(blob(nrm=[(0, 0, 0)] * 4))
 files["index_out_of_range.gltf"] = base(blob(idx=[0, 2, 1, 0, 3, 9]))
 files["degenerate_triangle.gltf"] = base(blob(idx=[0, 0, 1, 0, 3, 2]))
 
+# Strips and fans (converted to lists) and a points primitive beside triangles (skipped).
+def strip_or_fan(mode, order):
+    g = base(blob(idx=order))
+    g["accessors"][3]["count"] = len(order)
+    g["bufferViews"][3]["byteLength"] = 2 * len(order)
+    g["meshes"][0]["primitives"][0]["mode"] = mode
+    return g
+files["triangle_strip.gltf"] = strip_or_fan(5, [0, 3, 1, 2])
+files["triangle_fan.gltf"] = strip_or_fan(6, [0, 3, 2, 1])
+g = base()
+g["meshes"][0]["primitives"].append({"attributes": {"POSITION": 0}, "mode": 0})
+files["points_beside_triangles.gltf"] = g
+
 # A 3000-deep node chain (deeper than lightlab's 1024 levels).
 g = base()
 n0 = len(g["nodes"])
