@@ -194,7 +194,7 @@ pub fn gpu_context() -> Result<lightlab_gpu::GpuContext> {
 
 /// Load a scene and print what loading dropped or changed as warnings.
 pub fn load_scene(spec: &str, load: &options::LoadArgs) -> Result<lightlab_scene::Scene> {
-    let scene = lightlab_scene::load(spec, load.options())?;
+    let scene = load.load(spec)?;
     for w in &scene.warnings {
         eprintln!("lightlab: warning: {spec}: {w}");
     }

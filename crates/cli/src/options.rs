@@ -17,9 +17,25 @@ use lightlab_gpu::raster::{Ambient, RasterSettings, RenderPath, ShadowMethod};
 use lightlab_scene::{BrdfModel, Scene};
 use std::path::PathBuf;
 
-/// How a glTF scene is loaded (every command that takes `--scene`).
-#[derive(Args, Clone, Copy, Debug, Default)]
+/// How a glTF scene is loaded and lit (every command that takes `--scene`).
+#[derive(Args, Clone, Debug, Default)]
 pub struct LoadArgs {
+    /// Light the scene with an equirectangular environment map (.hdr or .exr), or `sky`: a
+    /// Preetham daylight sky with its sun (see --sun). Replaces the scene's environment.
+    /// Scenes without any light get the daylight by default, with a notice.
+    #[arg(long, value_name = "FILE|sky")]
+    pub env: Option<String>,
+    /// Multiplier on an `--env` map.
+    #[arg(long, default_value_t = 1.0)]
+    pub env_intensity: f32,
+    /// The daylight's sun: ELEVATION,AZIMUTH in degrees (azimuth from +Z towards +X), and
+    /// optionally its irradiance at normal incidence in units of 10 klx (default 45,135,8).
+    /// With `--env FILE` the sun is added to the map's light.
+    #[arg(long, value_name = "ELEV,AZIM[,E]", allow_hyphen_values = true)]
+    pub sun: Option<String>,
+    /// Turbidity of the daylight sky, 2 (clear) to 10 (hazy).
+    #[arg(long, default_value_t = 3.0)]
+    pub turbidity: f32,
     /// Refuse glTF input that loading would otherwise repair with a warning (degenerate
     /// triangles are dropped, point and line primitives skipped).
     #[arg(long)]
@@ -34,6 +50,78 @@ pub struct LoadArgs {
 }
 
 impl LoadArgs {
+    /// The daylight of `--sun` and `--turbidity`, checked.
+    pub fn daylight(&self) -> Result<lightlab_core::sky::Daylight> {
+        let mut d = lightlab_core::sky::Daylight {
+            turbidity: self.turbidity,
+            ..Default::default()
+        };
+        if let Some(sun) = &self.sun {
+            let v: Vec<f32> = sun
+                .split(',')
+                .map(|x| x.trim().parse::<f32>())
+                .collect::<Result<_, _>>()
+                .ok()
+                .filter(|v: &Vec<f32>| (2..=3).contains(&v.len()))
+                .with_context(|| {
+                    format!("--sun '{sun}': expected ELEVATION,AZIMUTH[,IRRADIANCE] in degrees")
+                })?;
+            d.elevation = v[0];
+            d.azimuth = v[1];
+            if let Some(&e) = v.get(2) {
+                d.sun_irradiance = e;
+            }
+        }
+        d.check()
+            .map_err(|m| anyhow::anyhow!("--sun/--turbidity: {m}"))?;
+        Ok(d)
+    }
+
+    /// Load `spec` and light it as asked: `--env`, `--sun`, or the default daylight for a
+    /// scene without any light (with a notice). Options are checked before the scene loads.
+    pub fn load(&self, spec: &str) -> Result<Scene> {
+        let daylight = self.daylight()?;
+        anyhow::ensure!(
+            self.env_intensity.is_finite() && self.env_intensity >= 0.0,
+            "--env-intensity must be a finite, non-negative number"
+        );
+        let map = match self.env.as_deref() {
+            None | Some("sky") => None,
+            Some(file) => Some(lightlab_core::image::Image::read(std::path::Path::new(
+                file,
+            ))?),
+        };
+        let mut scene = lightlab_scene::load(spec, self.options())?;
+        match (self.env.as_deref(), map) {
+            (Some("sky"), _) => scene.add_daylight(&daylight),
+            (Some(file), Some(image)) => {
+                let env = lightlab_scene::Environment {
+                    image,
+                    intensity: self.env_intensity,
+                };
+                env.check()
+                    .map_err(|m| anyhow::anyhow!("--env {file}: {m}"))?;
+                scene.environment = Some(env);
+                if self.sun.is_some() {
+                    scene.add_sun(&daylight);
+                }
+            }
+            _ if scene.is_unlit() => {
+                eprintln!(
+                    "lightlab: notice: {spec} has no lights, no emissive surfaces and no \
+                     environment: it is lit by a default daylight (Preetham sky, turbidity {}, \
+                     sun at {}° elevation, {}° azimuth); choose another with --env FILE|sky \
+                     and --sun",
+                    daylight.turbidity, daylight.elevation, daylight.azimuth
+                );
+                scene.add_daylight(&daylight);
+            }
+            _ if self.sun.is_some() => scene.add_sun(&daylight),
+            _ => {}
+        }
+        Ok(scene)
+    }
+
     pub fn options(&self) -> lightlab_scene::LoadOptions {
         lightlab_scene::LoadOptions {
             strict: self.strict,

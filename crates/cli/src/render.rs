@@ -53,13 +53,6 @@ pub struct RenderArgs {
     /// Tone operator of PNG output: clamp, reinhard or filmic.
     #[arg(long, default_value = "filmic")]
     pub tonemap: ToneMap,
-    /// Light the scene with this equirectangular environment map (.hdr or .exr), replacing any
-    /// environment the scene has.
-    #[arg(long)]
-    pub env: Option<PathBuf>,
-    /// Multiplier on `--env`.
-    #[arg(long, default_value_t = 1.0)]
-    pub env_intensity: f32,
     #[command(flatten)]
     pub load: crate::options::LoadArgs,
     /// Print one JSON object with the timings as the last line.
@@ -121,20 +114,6 @@ pub fn run(a: RenderArgs) -> Result<()> {
         a.exposure
     );
     let mut scene = load_scene(&a.scene, &a.load)?;
-    if let Some(env) = &a.env {
-        anyhow::ensure!(
-            a.env_intensity.is_finite() && a.env_intensity >= 0.0,
-            "--env-intensity must be a finite, non-negative number"
-        );
-        let environment = lightlab_scene::Environment {
-            image: Image::read(env)?,
-            intensity: a.env_intensity,
-        };
-        environment
-            .check()
-            .map_err(|m| anyhow::anyhow!("--env {}: {m}", env.display()))?;
-        scene.environment = Some(environment);
-    }
     crate::options::apply_brdf(&mut scene, a.gpu.raster.brdf);
     a.technique.check_options(&a.gpu, a.indirect_only)?;
     if a.technique.family() != Family::PathTraced {

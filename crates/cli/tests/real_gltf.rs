@@ -116,3 +116,100 @@ fn a_texture_on_texcoord_1_renders_alike_in_the_reference_and_on_the_gpu() {
         var.sqrt()
     );
 }
+
+#[test]
+fn a_file_without_lights_is_lit_by_daylight_with_a_notice_everywhere() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut s = lightlab_scene::builtin::builtin("shadows").unwrap();
+    s.lights.clear();
+    s.environment = None;
+    assert!(s.is_unlit());
+    let glb = tmp.path().join("unlit.glb");
+    lightlab_scene::gltf_io::export(&s, &glb).unwrap();
+    let g = glb.to_str().unwrap();
+    let notice = "has no lights";
+    for technique in ["reference", "phong-shadow-maps"] {
+        let out = tmp.path().join(format!("{technique}.exr"));
+        let e = ok(&lightlab(&[
+            "render",
+            "--scene",
+            g,
+            "--technique",
+            technique,
+            "--width",
+            "48",
+            "--spp",
+            "16",
+            "-o",
+            out.to_str().unwrap(),
+        ]));
+        assert!(
+            e.contains(notice) && e.contains("Preetham"),
+            "{technique}: {e}"
+        );
+        let img = lightlab_core::image::Image::read(&out).unwrap();
+        assert!(
+            img.mean().element_sum() / 3.0 > 0.2,
+            "{technique}: mean {}",
+            img.mean()
+        );
+    }
+    let baked = tmp.path().join("baked");
+    let e = ok(&lightlab(&[
+        "bake",
+        "--scene",
+        g,
+        "--method",
+        "path",
+        "--gather-samples",
+        "8",
+        "--texels-per-metre",
+        "4",
+        "--out",
+        baked.to_str().unwrap(),
+    ]));
+    assert!(e.contains(notice), "bake: {e}");
+    let page = lightlab_core::image::Image::read(&baked.join("lightmap-0.exr")).unwrap();
+    assert!(
+        page.mean().element_sum() > 0.1,
+        "bake: mean {}",
+        page.mean()
+    );
+    // --env sky and --sun light a scene that has lights of its own too, and bad suns are
+    // refused before any work.
+    let out = tmp.path().join("sky.exr");
+    let o = out.to_str().unwrap();
+    ok(&lightlab(&[
+        "render",
+        "--scene",
+        "cornell",
+        "--technique",
+        "direct",
+        "--env",
+        "sky",
+        "--sun",
+        "30,90,5",
+        "--width",
+        "16",
+        "--spp",
+        "4",
+        "-o",
+        o,
+    ]));
+    for bad in ["90", "-5,10", "45,x", "45,10,-1"] {
+        let r = lightlab(&[
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            "direct",
+            "--sun",
+            bad,
+            "-o",
+            o,
+        ]);
+        let e = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(1), "--sun {bad}: {e}");
+        assert!(e.contains("--sun"), "--sun {bad}: {e}");
+    }
+}

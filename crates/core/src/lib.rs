@@ -36,6 +36,7 @@ pub mod quadrature;
 pub mod sampling;
 pub mod sh;
 pub mod sh_env;
+pub mod sky;
 pub mod wind;
 
 pub use glam;

@@ -509,6 +509,43 @@ impl Camera {
 }
 
 impl Scene {
+    /// Whether nothing lights the scene: no punctual light, no environment, and no instance
+    /// of an emissive material.
+    pub fn is_unlit(&self) -> bool {
+        self.lights.is_empty()
+            && self.environment.is_none()
+            && !self
+                .instances
+                .iter()
+                .any(|i| self.materials[self.meshes[i.mesh].material].is_emissive())
+    }
+
+    /// Light the scene with daylight `d`: its Preetham sky as the environment (replacing any)
+    /// and its sun as a directional light.
+    pub fn add_daylight(&mut self, d: &lightlab_core::sky::Daylight) {
+        self.environment = Some(Environment {
+            image: d.environment(256),
+            intensity: 1.0,
+        });
+        self.add_sun(d);
+    }
+
+    /// Daylight `d`'s sun as a directional light named "sun".
+    pub fn add_sun(&mut self, d: &lightlab_core::sky::Daylight) {
+        use lightlab_core::sky::{SUN_COLOR, SUN_DIAMETER};
+        self.lights.push(Light {
+            name: "sun".into(),
+            kind: LightKind::Directional {
+                angular_diameter: SUN_DIAMETER,
+            },
+            color: SUN_COLOR,
+            intensity: d.sun_irradiance,
+            position: Vec3::ZERO,
+            direction: -d.sun_direction(),
+            range: None,
+        });
+    }
+
     /// Texture `r` at the surface point with coordinates `uv`, in the set `r` names.
     pub fn sample(&self, r: TextureRef, uv: Uv) -> Vec4 {
         self.textures[r.texture].sample(uv.set(r.uv_set))
