@@ -234,19 +234,13 @@ pub fn read_manifest(
     let value: Value = serde_json::from_str(&text).map_err(|e| io(&path, e))?;
     let found = value.get("format").and_then(Value::as_str);
     if found != Some(format) {
-        let what = match found {
-            Some("lightlab-lightmaps") => "a light-map folder (`bake --method radiosity|path`)",
-            Some(crate::sh_folder::SH_FORMAT) => {
-                "an SH light-map folder (`bake --method sh|prt-textured`)"
-            }
-            Some(crate::sh_folder::VERTEX_FORMAT) => {
-                "a per-vertex transfer folder (`bake --method prt`)"
-            }
-            _ => "not a lightlab bake folder",
-        };
         return Err(io(
             &path,
-            format!("is {what}; this needs one written by `lightlab bake --method {method}`"),
+            format!(
+                "is {}; this needs {}",
+                kind_of(found),
+                kind_of(Some(format))
+            ),
         ));
     }
     let v = value.get("version").and_then(Value::as_u64);
@@ -271,6 +265,20 @@ pub fn read_manifest(
         files: integrity.files.into_iter().map(|f| f.name).collect(),
     };
     Ok((checked, value))
+}
+
+/// What a folder of manifest format `format` is, and which bake writes it.
+fn kind_of(format: Option<&str>) -> &'static str {
+    match format {
+        Some(crate::output::FORMAT) => "a light-map folder (`bake --method radiosity|path`)",
+        Some(crate::sh_folder::SH_FORMAT) => {
+            "an SH light-map folder (`bake --method sh|prt-textured`)"
+        }
+        Some(crate::sh_folder::VERTEX_FORMAT) => {
+            "a per-vertex transfer folder (`bake --method prt`)"
+        }
+        _ => "not a lightlab bake folder",
+    }
 }
 
 /// Every file of `integrity` is in `dir` with its size and checksum.

@@ -270,7 +270,7 @@ fn bench_trace(
 
 /// Resident-memory figures of this process in MiB: (current, peak since the last reset).
 /// None where /proc is not available.
-fn memory_mib() -> Option<(f64, f64)> {
+pub(crate) fn memory_mib() -> Option<(f64, f64)> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let field = |name: &str| -> Option<f64> {
         let line = status.lines().find(|l| l.starts_with(name))?;
@@ -281,7 +281,7 @@ fn memory_mib() -> Option<(f64, f64)> {
 }
 
 /// Reset the peak-RSS counter (Linux ≥ 4.0); harmless where it is not supported.
-fn reset_peak_memory() {
+pub(crate) fn reset_peak_memory() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 

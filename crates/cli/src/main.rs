@@ -11,6 +11,7 @@
 mod acceptance;
 mod bake_cmd;
 mod bench;
+mod check;
 mod demo;
 mod options;
 mod plot;
@@ -105,6 +106,9 @@ enum Command {
     Sh(sh_cmd::ShCommand),
     /// Interactive viewer: a window with the GPU techniques, an orbit camera and a panel.
     View(view_cmd::ViewArgs),
+    /// Survey the glTF files of a folder: load time, peak memory, warnings, and the relMSE of
+    /// phong-shadow-maps against direct and of lightmap against reference.
+    Check(check::CheckArgs),
 }
 
 /// An error for features that later work will add: exit code 2.
@@ -192,13 +196,9 @@ pub fn gpu_context() -> Result<lightlab_gpu::GpuContext> {
     Ok(ctx)
 }
 
-/// Load a scene and print what loading dropped or changed as warnings.
+/// Load a scene, printing what loading dropped or changed as warnings.
 pub fn load_scene(spec: &str, load: &options::LoadArgs) -> Result<lightlab_scene::Scene> {
-    let scene = load.load(spec)?;
-    for w in &scene.warnings {
-        eprintln!("lightlab: warning: {spec}: {w}");
-    }
-    Ok(scene)
+    load.load(spec)
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -273,5 +273,6 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench(cmd) => bench::run(cmd),
         Command::Sh(cmd) => sh_cmd::run(cmd),
         Command::View(a) => view_cmd::view(&a),
+        Command::Check(a) => check::run(&a),
     }
 }

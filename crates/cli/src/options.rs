@@ -78,8 +78,18 @@ impl LoadArgs {
     }
 
     /// Load `spec` and light it as asked: `--env`, `--sun`, or the default daylight for a
-    /// scene without any light (with a notice). Options are checked before the scene loads.
+    /// scene without any light. Options are checked before the scene loads. Prints what
+    /// loading changed as warnings, and the default light as a notice.
     pub fn load(&self, spec: &str) -> Result<Scene> {
+        let (scene, notes) = self.load_quietly(spec)?;
+        for n in notes {
+            eprintln!("lightlab: {n}");
+        }
+        Ok(scene)
+    }
+
+    /// [`LoadArgs::load`], returning the warnings and notices instead of printing them.
+    pub fn load_quietly(&self, spec: &str) -> Result<(Scene, Vec<String>)> {
         let daylight = self.daylight()?;
         anyhow::ensure!(
             self.env_intensity.is_finite() && self.env_intensity >= 0.0,
@@ -92,6 +102,11 @@ impl LoadArgs {
             ))?),
         };
         let mut scene = lightlab_scene::load(spec, self.options())?;
+        let mut notes: Vec<String> = scene
+            .warnings
+            .iter()
+            .map(|w| format!("warning: {spec}: {w}"))
+            .collect();
         match (self.env.as_deref(), map) {
             (Some("sky"), _) => scene.add_daylight(&daylight),
             (Some(file), Some(image)) => {
@@ -107,19 +122,18 @@ impl LoadArgs {
                 }
             }
             _ if scene.is_unlit() => {
-                eprintln!(
-                    "lightlab: notice: {spec} has no lights, no emissive surfaces and no \
-                     environment: it is lit by a default daylight (Preetham sky, turbidity {}, \
-                     sun at {}° elevation, {}° azimuth); choose another with --env FILE|sky \
-                     and --sun",
+                notes.push(format!(
+                    "notice: {spec} has no lights, no emissive surfaces and no environment: it \
+                     is lit by a default daylight (Preetham sky, turbidity {}, sun at {}° \
+                     elevation, {}° azimuth); choose another with --env FILE|sky and --sun",
                     daylight.turbidity, daylight.elevation, daylight.azimuth
-                );
+                ));
                 scene.add_daylight(&daylight);
             }
             _ if self.sun.is_some() => scene.add_sun(&daylight),
             _ => {}
         }
-        Ok(scene)
+        Ok((scene, notes))
     }
 
     pub fn options(&self) -> lightlab_scene::LoadOptions {

@@ -39,12 +39,14 @@ fn checker_on_uv1() -> Scene {
         name: "checker".into(),
         width: 8,
         height: 8,
-        data: (0..64)
-            .map(|i| {
-                let c = if (i % 8 + i / 8) % 2 == 0 { 0.9 } else { 0.05 };
-                Vec4::new(c, c * 0.8, c * 0.6, 1.0)
-            })
-            .collect(),
+        texels: lightlab_scene::Texels::Rgba32F(
+            (0..64)
+                .map(|i| {
+                    let c = if (i % 8 + i / 8) % 2 == 0 { 0.9 } else { 0.05 };
+                    Vec4::new(c, c * 0.8, c * 0.6, 1.0)
+                })
+                .collect(),
+        ),
         srgb: true,
     };
     s.textures.push(checker);
@@ -211,5 +213,109 @@ fn a_file_without_lights_is_lit_by_daylight_with_a_notice_everywhere() {
         let e = String::from_utf8_lossy(&r.stderr);
         assert_eq!(r.status.code(), Some(1), "--sun {bad}: {e}");
         assert!(e.contains("--sun"), "--sun {bad}: {e}");
+    }
+}
+
+/// A single-sided quad (facing +Y) over a lit box, seen from below through the quad, with a
+/// near plane that cuts a second quad close to the camera.
+fn faces_and_near_plane(double_sided: bool) -> Scene {
+    use lightlab_scene::builtin::geom::{aabb_box, quad_facing};
+    use lightlab_scene::{Camera, Light, LightKind, Material};
+    let mut s = Scene::default();
+    let mut m = Material::diffuse("white", Vec3::splat(0.7));
+    m.double_sided = double_sided;
+    let mat = s.add_material(m);
+    let grey = s.add_material(Material::diffuse("grey", Vec3::splat(0.5)));
+    let q = |y: f32, h: f32| {
+        [
+            Vec3::new(-h, y, -h),
+            Vec3::new(h, y, -h),
+            Vec3::new(h, y, h),
+            Vec3::new(-h, y, h),
+        ]
+    };
+    s.add_mesh(
+        quad_facing("sheet", q(1.0, 1.0), Vec3::Y * 9.0, mat),
+        glam::Mat4::IDENTITY,
+    );
+    // 5 cm in front of the camera, inside a 0.2 m near plane: clipped by both.
+    s.add_mesh(
+        quad_facing("near", q(-0.95, 0.3), -Vec3::Y * 9.0, grey),
+        glam::Mat4::IDENTITY,
+    );
+    s.add_mesh(
+        aabb_box(
+            "box",
+            Vec3::new(-0.4, 1.6, -0.4),
+            Vec3::new(0.4, 2.4, 0.4),
+            grey,
+        ),
+        glam::Mat4::IDENTITY,
+    );
+    s.lights.push(Light {
+        name: "lamp".into(),
+        kind: LightKind::Point,
+        color: Vec3::ONE,
+        intensity: 2.0,
+        position: Vec3::new(0.0, 1.3, 0.6),
+        direction: -Vec3::Y,
+        range: None,
+    });
+    let mut cam = Camera::look_at("below", Vec3::new(0.0, -1.0, 0.0), Vec3::ZERO, Vec3::Z, 1.2);
+    cam.znear = 0.2;
+    s.cameras.push(cam);
+    s
+}
+
+#[test]
+fn back_faces_and_the_near_plane_mean_the_same_in_the_reference_and_on_the_gpu() {
+    let tmp = tempfile::tempdir().unwrap();
+    for double_sided in [false, true] {
+        let glb = tmp.path().join(format!("faces-{double_sided}.glb"));
+        lightlab_scene::gltf_io::export(&faces_and_near_plane(double_sided), &glb).unwrap();
+        let g = glb.to_str().unwrap();
+        let (direct, gpu) = (tmp.path().join("d.exr"), tmp.path().join("g.exr"));
+        ok(&lightlab(&[
+            "render",
+            "--scene",
+            g,
+            "--technique",
+            "direct",
+            "--width",
+            "64",
+            "--spp",
+            "64",
+            "-o",
+            direct.to_str().unwrap(),
+        ]));
+        ok(&lightlab(&[
+            "render",
+            "--scene",
+            g,
+            "--technique",
+            "phong-shadow-maps",
+            "--ambient",
+            "none",
+            "--width",
+            "64",
+            "-o",
+            gpu.to_str().unwrap(),
+        ]));
+        let e = relmse(&gpu, &direct);
+        eprintln!("double-sided {double_sided}: phong-shadow-maps against direct, relMSE {e:.4}");
+        assert!(e < 0.02, "double-sided {double_sided}: relMSE {e}");
+        // Single-sided: the camera sees through the sheet to the lit box; double-sided: the
+        // sheet's unlit underside fills the middle.
+        if let Ok(keep) = std::env::var("LIGHTLAB_KEEP") {
+            let _ = std::fs::copy(
+                &direct,
+                Path::new(&keep).join(format!("d-{double_sided}.exr")),
+            );
+            let _ = std::fs::copy(&gpu, Path::new(&keep).join(format!("g-{double_sided}.exr")));
+            let _ = std::fs::copy(&glb, Path::new(&keep).join(format!("s-{double_sided}.glb")));
+        }
+        let img = lightlab_core::image::Image::read(&direct).unwrap();
+        let centre = img.data[(32 * 64 + 32) as usize].element_sum();
+        assert_eq!(centre > 0.01, !double_sided, "centre {centre}");
     }
 }

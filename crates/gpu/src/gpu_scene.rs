@@ -113,7 +113,7 @@ pub fn material_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 fn mip_chain(t: &Texture) -> Vec<(u32, u32, Vec<half::f16>)> {
     let mut levels = vec![];
     let (mut w, mut h) = (t.width.max(1), t.height.max(1));
-    let mut cur: Vec<Vec4> = t.data.clone();
+    let mut cur: Vec<Vec4> = t.to_linear();
     loop {
         levels.push((
             w,
@@ -342,7 +342,7 @@ fn upload_materials(
             name: "white".into(),
             width: 1,
             height: 1,
-            data: vec![Vec4::ONE],
+            texels: lightlab_scene::Texels::Rgba32F(vec![Vec4::ONE]),
             srgb: false,
         },
     );

@@ -58,7 +58,7 @@ fn ridged_floor(tilt: f32) -> Scene {
             name: "ridges".into(),
             width: size,
             height: size,
-            data,
+            texels: lightlab_scene::Texels::Rgba32F(data),
             srgb: false,
         }],
         instances: vec![Instance {

@@ -21,9 +21,11 @@ fn backlit_leaf(with_map: bool) -> Scene {
         name: "translucency".into(),
         width: 16,
         height: 16,
-        data: (0..256)
-            .map(|i| Vec4::new(1.0, 1.0, 1.0, if i % 16 < 8 { 1.0 } else { 0.25 }))
-            .collect(),
+        texels: lightlab_scene::Texels::Rgba32F(
+            (0..256)
+                .map(|i| Vec4::new(1.0, 1.0, 1.0, if i % 16 < 8 { 1.0 } else { 0.25 }))
+                .collect(),
+        ),
         srgb: false,
     };
     s.textures.push(tex);

@@ -224,10 +224,10 @@ mod tests {
             name: "half".into(),
             width: 2,
             height: 1,
-            data: vec![
+            texels: crate::Texels::Rgba32F(vec![
                 glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
                 glam::Vec4::new(1.0, 0.5, 0.25, 1.0),
-            ],
+            ]),
             srgb: false,
         };
         s.textures.push(tex);

@@ -20,7 +20,7 @@
 use crate::model::*;
 use crate::{LoadOptions, SceneError};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
-use lightlab_core::color::{srgb_decode, srgb_encode};
+use lightlab_core::color::srgb_encode;
 use lightlab_core::image::{Image, LdrSettings};
 use serde_json::{Value, json};
 use std::collections::HashMap;
@@ -67,7 +67,7 @@ pub fn import_slice(path: &Path, bytes: &[u8], opts: LoadOptions) -> Result<Scen
         opts,
         doc: &document,
         buffers: &inputs.buffers,
-        images: &inputs.images,
+        images: inputs.images.into_iter().map(Some).collect(),
         scene: Scene::default(),
         mesh_map: HashMap::new(),
         tex_map: HashMap::new(),
@@ -206,7 +206,8 @@ struct Importer<'a> {
     opts: LoadOptions,
     doc: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
-    images: &'a [image::DynamicImage],
+    /// Decoded images, each taken by the first texture that uses it.
+    images: Vec<Option<image::DynamicImage>>,
     scene: Scene,
     /// (glTF mesh, primitive) → lightlab mesh.
     mesh_map: HashMap<(usize, usize), usize>,
@@ -328,38 +329,51 @@ impl Importer<'_> {
         if let Some(&t) = self.tex_map.get(&(img_index, srgb)) {
             return Ok(t);
         }
-        let img = &self.images[img_index];
         let name = tex
             .source()
             .name()
             .map(String::from)
             .unwrap_or_else(|| format!("image{img_index}"));
-        let (w, h) = (img.width(), img.height());
-        if w == 0 || h == 0 {
-            return Err(SceneError::Content {
-                path: self.path.into(),
-                what: format!("image '{name}'"),
-                problem: "has zero size".into(),
-            });
-        }
-        // Grey images spread to RGB and grey–alpha keeps its alpha, as glTF reads them.
-        let data = img
-            .to_rgba32f()
-            .pixels()
-            .map(|p| {
-                let v = Vec4::from_array(p.0);
-                if srgb {
-                    Vec4::new(srgb_decode(v.x), srgb_decode(v.y), srgb_decode(v.z), v.w)
-                } else {
-                    v
+        // The decoded image moves into the texture (no copy for RGBA8); an image used both as
+        // colour and as data is the rare second texture, copied from the first.
+        let texels = match self.images[img_index].take() {
+            Some(img) => {
+                let (w, h) = (img.width(), img.height());
+                if w == 0 || h == 0 {
+                    return Err(SceneError::Content {
+                        path: self.path.into(),
+                        what: format!("image '{name}'"),
+                        problem: "has zero size".into(),
+                    });
                 }
-            })
-            .collect();
+                // Grey spreads to RGB and grey–alpha keeps its alpha, as glTF reads them.
+                let texels = match img {
+                    image::DynamicImage::ImageLuma16(_)
+                    | image::DynamicImage::ImageLumaA16(_)
+                    | image::DynamicImage::ImageRgb16(_)
+                    | image::DynamicImage::ImageRgba16(_) => {
+                        Texels::Rgba16(img.into_rgba16().into_raw())
+                    }
+                    _ => Texels::Rgba8(img.into_rgba8().into_raw()),
+                };
+                (w, h, texels)
+            }
+            None => {
+                let t = self
+                    .tex_map
+                    .iter()
+                    .find(|((i, _), _)| *i == img_index)
+                    .map(|(_, &t)| &self.scene.textures[t])
+                    .expect("an image taken belongs to a texture");
+                (t.width, t.height, t.texels.clone())
+            }
+        };
+        let (width, height, texels) = texels;
         self.scene.textures.push(Texture {
             name,
-            width: w,
-            height: h,
-            data,
+            width,
+            height,
+            texels,
             srgb,
         });
         let id = self.scene.textures.len() - 1;
@@ -649,6 +663,47 @@ impl Importer<'_> {
     }
 }
 
+/// A texture as PNG: 8- and 16-bit texels as stored (an import–export round trip keeps them
+/// exactly), float texels encoded to 8 bits (sRGB-encoded for colour textures).
+fn texture_png(t: &Texture) -> Result<Vec<u8>, image::ImageError> {
+    let (w, h) = (t.width, t.height);
+    let img = match &t.texels {
+        Texels::Rgba8(v) => image::RgbaImage::from_raw(w, h, v.clone()).map(Into::into),
+        Texels::Rgba16(v) => image::ImageBuffer::<image::Rgba<u16>, _>::from_raw(w, h, v.clone())
+            .map(image::DynamicImage::ImageRgba16),
+        Texels::Rgba32F(v) => {
+            let enc = |x: f32| {
+                if t.srgb {
+                    srgb_encode(x)
+                } else {
+                    x.clamp(0.0, 1.0)
+                }
+            };
+            let q = |x: f32| (x * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8;
+            let rgba = v
+                .iter()
+                .flat_map(|v| {
+                    [
+                        q(enc(v.x)),
+                        q(enc(v.y)),
+                        q(enc(v.z)),
+                        q(v.w.clamp(0.0, 1.0)),
+                    ]
+                })
+                .collect();
+            image::RgbaImage::from_raw(w, h, rgba).map(Into::into)
+        }
+    };
+    let img: image::DynamicImage = img.ok_or_else(|| {
+        image::ImageError::Parameter(image::error::ParameterError::from_kind(
+            image::error::ParameterErrorKind::DimensionMismatch,
+        ))
+    })?;
+    let mut png = vec![];
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)?;
+    Ok(png)
+}
+
 /// The triangles of a primitive as a list: strips and fans converted, with the winding of
 /// glTF's definition (strip triangle i: i, i+1, i+2 with odd i swapped; fan: 0, i+1, i+2).
 fn triangle_list(mode: gltf::mesh::Mode, idx: Vec<u32>) -> Vec<u32> {
@@ -826,35 +881,11 @@ impl Writer {
         // Textures as PNG images in the binary blob.
         let mut images = vec![];
         for t in &scene.textures {
-            let rgba: Vec<u8> = t
-                .data
-                .iter()
-                .flat_map(|v| {
-                    let enc = |x: f32| {
-                        if t.srgb {
-                            srgb_encode(x)
-                        } else {
-                            x.clamp(0.0, 1.0)
-                        }
-                    };
-                    let q = |x: f32| (x * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8;
-                    [
-                        q(enc(v.x)),
-                        q(enc(v.y)),
-                        q(enc(v.z)),
-                        q(v.w.clamp(0.0, 1.0)),
-                    ]
-                })
-                .collect();
-            let mut png = vec![];
-            image::RgbaImage::from_raw(t.width, t.height, rgba)
-                .expect("size matches")
-                .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-                .map_err(|e| SceneError::Content {
-                    path: path.into(),
-                    what: format!("texture '{}'", t.name),
-                    problem: e.to_string(),
-                })?;
+            let png = texture_png(t).map_err(|e| SceneError::Content {
+                path: path.into(),
+                what: format!("texture '{}'", t.name),
+                problem: e.to_string(),
+            })?;
             let view = self.view(&png, None);
             images.push(json!({ "name": t.name, "bufferView": view, "mimeType": "image/png" }));
         }

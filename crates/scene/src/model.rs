@@ -312,32 +312,123 @@ impl Material {
     }
 }
 
-/// A texture in linear float RGBA (sRGB textures are decoded on load).
+/// A texture: its texels in source precision, read as linear RGBA through [`Texture::texel`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     pub name: String,
     pub width: u32,
     pub height: u32,
-    pub data: Vec<Vec4>,
+    /// The texels in their source precision (RGBA, row-major).
+    pub texels: Texels,
     /// Whether the source encoding was sRGB (base colour, emissive) or linear (normal, data).
+    /// 8- and 16-bit texels are stored encoded and decoded on reading; float texels are linear.
     pub srgb: bool,
 }
 
+/// Texel storage in the precision the source had: an 8-bit PNG or JPEG costs 4 bytes a texel,
+/// not the 16 of four floats (a 2k-textured model needed 1.7 GB to load).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texels {
+    Rgba8(Vec<u8>),
+    Rgba16(Vec<u16>),
+    /// Linear values (built-in scenes, computed maps).
+    Rgba32F(Vec<Vec4>),
+}
+
+impl Texels {
+    /// The number of texels.
+    pub fn len(&self) -> usize {
+        match self {
+            Texels::Rgba8(v) => v.len() / 4,
+            Texels::Rgba16(v) => v.len() / 4,
+            Texels::Rgba32F(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        match self {
+            Texels::Rgba8(v) => v.len(),
+            Texels::Rgba16(v) => 2 * v.len(),
+            Texels::Rgba32F(v) => 16 * v.len(),
+        }
+    }
+}
+
+/// sRGB-encoded 8-bit value → linear, by table.
+fn srgb8_to_linear(v: u8) -> f32 {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        std::array::from_fn(|i| lightlab_core::color::srgb_decode(i as f32 / 255.0))
+    })[v as usize]
+}
+
 impl Texture {
+    /// A texture of linear float texels.
+    pub fn linear(name: &str, width: u32, height: u32, data: Vec<Vec4>, srgb: bool) -> Texture {
+        Texture {
+            name: name.into(),
+            width,
+            height,
+            texels: Texels::Rgba32F(data),
+            srgb,
+        }
+    }
+
+    /// Texel `i` (row-major), linear: sRGB-encoded colour channels decoded, alpha as stored.
+    pub fn texel(&self, i: usize) -> Vec4 {
+        use lightlab_core::color::srgb_decode;
+        match &self.texels {
+            Texels::Rgba32F(v) => v[i],
+            Texels::Rgba8(v) => {
+                let p = &v[4 * i..4 * i + 4];
+                let a = p[3] as f32 / 255.0;
+                if self.srgb {
+                    Vec4::new(
+                        srgb8_to_linear(p[0]),
+                        srgb8_to_linear(p[1]),
+                        srgb8_to_linear(p[2]),
+                        a,
+                    )
+                } else {
+                    Vec4::new(p[0] as f32, p[1] as f32, p[2] as f32, p[3] as f32) / 255.0
+                }
+            }
+            Texels::Rgba16(v) => {
+                let p = &v[4 * i..4 * i + 4];
+                let c = Vec4::new(p[0] as f32, p[1] as f32, p[2] as f32, p[3] as f32) / 65535.0;
+                if self.srgb {
+                    Vec4::new(srgb_decode(c.x), srgb_decode(c.y), srgb_decode(c.z), c.w)
+                } else {
+                    c
+                }
+            }
+        }
+    }
+
+    /// Every texel, linear (for uploads and filters that work on floats).
+    pub fn to_linear(&self) -> Vec<Vec4> {
+        (0..self.texels.len()).map(|i| self.texel(i)).collect()
+    }
+
     /// Bilinear lookup with repeat wrapping; `uv` in glTF convention (v down).
     pub fn sample(&self, uv: Vec2) -> Vec4 {
         let (w, h) = (self.width as i64, self.height as i64);
         let x = uv.x * self.width as f32 - 0.5;
         let y = uv.y * self.height as f32 - 0.5;
         if !x.is_finite() || !y.is_finite() {
-            return self.data[0];
+            return self.texel(0);
         }
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let at = |xi: i64, yi: i64| {
             let xi = xi.rem_euclid(w) as usize;
             let yi = yi.rem_euclid(h) as usize;
-            self.data[yi * w as usize + xi]
+            self.texel(yi * w as usize + xi)
         };
         let (x0, y0) = (x0 as i64, y0 as i64);
         let top = at(x0, y0).lerp(at(x0 + 1, y0), fx);

@@ -35,7 +35,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
     let nmat = scene.materials.len();
     let ntex = scene.textures.len();
     for t in &scene.textures {
-        if t.width == 0 || t.height == 0 || t.data.len() != (t.width * t.height) as usize {
+        if t.width == 0 || t.height == 0 || t.texels.len() != t.width as usize * t.height as usize {
             return Err(content(
                 format!("texture '{}'", t.name),
                 format!("zero-sized or inconsistent ({}×{})", t.width, t.height),

@@ -60,7 +60,7 @@ fn assert_same_scene(a: &Scene, b: &Scene) {
     assert_eq!(a.textures.len(), b.textures.len());
     for (x, y) in a.textures.iter().zip(&b.textures) {
         assert_eq!((x.width, x.height), (y.width, y.height));
-        for (p, q) in x.data.iter().zip(&y.data) {
+        for (p, q) in x.to_linear().iter().zip(&y.to_linear()) {
             assert!((*p - *q).abs().max_element() < 0.01, "texel {p} vs {q}");
         }
     }

@@ -196,13 +196,27 @@ impl Accel {
             })
             .collect();
         let alpha_index: Vec<u32> = order.iter().map(|&i| orig_alpha[i as usize]).collect();
+        // Only the textures alpha tests read are kept (a copy of every texture doubled the
+        // memory of a textured scene); AlphaTri::texture is renumbered into this list.
+        let mut kept: Vec<u32> = alpha.iter().filter_map(|a| a.texture).collect();
+        kept.sort_unstable();
+        kept.dedup();
+        for a in &mut alpha {
+            a.texture = a
+                .texture
+                .map(|t| kept.binary_search(&t).expect("listed above") as u32);
+        }
+        let textures = kept
+            .iter()
+            .map(|&t| scene.textures[t as usize].clone())
+            .collect();
         Accel {
             bvh,
             tris: rt,
             prims: prims_o,
             alpha_index,
             alpha,
-            textures: scene.textures.clone(),
+            textures,
             normal_matrices: scene.instances.iter().map(|i| i.normal_matrix()).collect(),
             rays: RayCounter::new(),
         }
@@ -375,7 +389,10 @@ mod tests {
             name: "mask".into(),
             width: 2,
             height: 1,
-            data: vec![Vec4::new(1.0, 1.0, 1.0, 1.0), Vec4::new(1.0, 1.0, 1.0, 0.0)],
+            texels: lightlab_scene::Texels::Rgba32F(vec![
+                Vec4::new(1.0, 1.0, 1.0, 1.0),
+                Vec4::new(1.0, 1.0, 1.0, 0.0),
+            ]),
             srgb: true,
         };
         let mat = Material {

@@ -243,7 +243,9 @@ impl<'a> PathTracer<'a> {
         }
     }
 
-    /// Radiance along one camera ray.
+    /// Radiance along one camera ray. As a rasteriser culls them, the back faces of
+    /// single-sided materials are invisible to it (glTF `doubleSided: false`); the ray passes
+    /// through them. Later bounces see every face.
     pub fn radiance(&self, origin: Vec3, dir: Vec3, s: &RenderSettings, rng: &mut Rng) -> Vec3 {
         self.trace(Start::Ray(origin, dir), s, rng)
     }
@@ -279,6 +281,8 @@ impl<'a> PathTracer<'a> {
         let mut prev_p = o;
         // Scattering events so far.
         let mut depth = 0u32;
+        // Back faces a camera ray passed through (bounded: a ray cannot be culled forever).
+        let mut culled = 0u32;
         loop {
             if let Some((p, ng, ns, bsdf)) = first.take() {
                 // The texel itself: no emission, straight to scattering.
@@ -331,8 +335,13 @@ impl<'a> PathTracer<'a> {
             };
             let sf = surface(scene, self.accel, &hit);
             let wo = -d;
-            // Emission, seen from the front (or either side if double-sided).
             let mat = &scene.materials[sf.material];
+            if depth == 0 && !mat.double_sided && wo.dot(sf.ng) < 0.0 && culled < 64 {
+                culled += 1;
+                o = offset(sf.p, sf.ng, d);
+                continue;
+            }
+            // Emission, seen from the front (or either side if double-sided).
             if mat.is_emissive() && keep(depth) && (wo.dot(sf.ng) > 0.0 || mat.double_sided) {
                 let le = emission(scene, sf.material, sf.uv);
                 let w = if prev_pdf > 0.0 {
@@ -492,6 +501,7 @@ impl<'a> PathTracer<'a> {
         let (w, h) = (s.width, s.height);
         let aspect = w as f32 / h as f32;
         let origin = cam.position();
+        let forward = cam.transform.transform_vector3(-Vec3::Z).normalize();
         let done = AtomicUsize::new(0);
         let cancelled = AtomicBool::new(false);
         let rows: Vec<Vec<Vec3>> = (0..h)
@@ -511,7 +521,9 @@ impl<'a> PathTracer<'a> {
                                 1.0 - (y as f32 + j.y) / h as f32 * 2.0,
                             );
                             let dir = cam.ray_direction(ndc, aspect);
-                            let v = self.radiance(origin, dir, s, &mut rng);
+                            // Clipped at the near plane, as the rasteriser clips.
+                            let near = cam.znear / dir.dot(forward).max(1e-6);
+                            let v = self.radiance(origin + dir * near, dir, s, &mut rng);
                             if v.is_finite() {
                                 sum += v.as_dvec3();
                             }

@@ -484,7 +484,7 @@ fn leaf_texture() -> Texture {
         name: "leaf".into(),
         width: 64,
         height: 64,
-        data,
+        texels: crate::Texels::Rgba32F(data),
         srgb: true,
     }
 }
@@ -506,7 +506,7 @@ fn leaf_translucency() -> Texture {
         name: "leaf_translucency".into(),
         width: 64,
         height: 64,
-        data,
+        texels: crate::Texels::Rgba32F(data),
         srgb: false,
     }
 }
@@ -682,7 +682,7 @@ fn dune_normal_map() -> Texture {
         name: "dunes_normal".into(),
         width: n,
         height: n,
-        data,
+        texels: crate::Texels::Rgba32F(data),
         srgb: false,
     }
 }
