@@ -128,6 +128,13 @@ pub fn not_implemented(what: impl Into<String>) -> anyhow::Error {
 }
 
 fn main() -> ExitCode {
+    // Rust ignores SIGPIPE, so `lightlab compare a b | head -1` panicked in println! once the
+    // reader had gone; like other command-line tools, end quietly instead.
+    // SAFETY: the first statement of `main`, before any other thread exists.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     quiet_device_select();
     remove_unfinished_outputs_on_signals();
     let cli = match Cli::try_parse() {

@@ -303,3 +303,20 @@ fn inputs_that_gave_nan_images_render_or_are_refused_before_any_work() {
         "{e}"
     );
 }
+
+#[test]
+fn a_closed_output_pipe_ends_the_command_quietly() {
+    // `lightlab scenes | head -0`: the reader is gone before anything is printed. Rust's
+    // println! panicked (exit 101) on the broken pipe; now the process ends by SIGPIPE.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lightlab"))
+        .args(["scenes", "-v"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(!e.contains("panicked"), "{e}");
+    assert_ne!(out.status.code(), Some(101), "{e}");
+}
