@@ -123,6 +123,24 @@ fn instance_scale(m: &glam::Mat4) -> f32 {
 fn tri_area(a: Vec3, b: Vec3, c: Vec3) -> f32 {
     0.5 * (b - a).cross(c - a).length()
 }
+/// The world-space area of every instance's triangles [m²].
+pub fn surface_area(scene: &Scene) -> f64 {
+    scene
+        .instances
+        .iter()
+        .map(|inst| {
+            let m = &scene.meshes[inst.mesh];
+            m.indices
+                .chunks_exact(3)
+                .map(|t| {
+                    let [a, b, c] = [t[0], t[1], t[2]]
+                        .map(|i| inst.transform.transform_point3(m.positions[i as usize]));
+                    tri_area(a, b, c) as f64
+                })
+                .sum::<f64>()
+        })
+        .sum()
+}
 
 /// Give every instanced mesh light-map UVs and return the layout. Meshes are rewritten where
 /// the unwrap splits vertices along chart seams (all attributes are carried over).
@@ -154,21 +172,7 @@ pub fn unwrap_scene(scene: &mut Scene, settings: &LayoutSettings) -> Result<Layo
         })
         .collect();
     // Refuse a request that cannot fit before the unwrap allocates its raster.
-    let area: f64 = scene
-        .instances
-        .iter()
-        .map(|inst| {
-            let m = &scene.meshes[inst.mesh];
-            m.indices
-                .chunks_exact(3)
-                .map(|t| {
-                    let [a, b, c] = [t[0], t[1], t[2]]
-                        .map(|i| inst.transform.transform_point3(m.positions[i as usize]));
-                    tri_area(a, b, c) as f64
-                })
-                .sum::<f64>()
-        })
-        .sum();
+    let area = surface_area(scene);
     let need = area * (settings.texels_per_metre as f64).powi(2);
     let page = settings.max_page_size as f64;
     if need > page * page {

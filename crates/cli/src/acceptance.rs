@@ -50,12 +50,12 @@ fn no_ambient(a: &mut TechniqueArgs) {
 }
 
 fn small_lightmap(a: &mut TechniqueArgs) {
-    a.bake.texels_per_metre = 24.0;
+    a.bake.texels_per_metre = Some(24.0);
     a.bake.samples = 64;
 }
 
 fn small_sh(a: &mut TechniqueArgs) {
-    a.bake.texels_per_metre = 12.0;
+    a.bake.texels_per_metre = Some(12.0);
     a.bake.transfer_samples = 64;
     a.bake.bounces = Some(1);
     a.sh.sh_representatives = 1024;

@@ -113,12 +113,16 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
     let s = args.transfer_settings()?;
     let kind = s.kind;
     let layout = lightlab_bake::layout::LayoutSettings {
-        texels_per_metre: args.texels_per_metre,
+        texels_per_metre: args.density(scene),
         ..Default::default()
     };
     eprintln!(
         "baking {} SH light-maps: {} bands, {:?}, {} directions per texel, {} texels/m",
-        scene.name, s.bands, kind, s.samples, args.texels_per_metre
+        scene.name,
+        s.bands,
+        kind,
+        s.samples,
+        args.density(scene)
     );
     let t = std::time::Instant::now();
     let sl = with_progress_bar(format!("{} sh", scene.name), |progress| {
@@ -179,7 +183,7 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
             "{}",
             serde_json::json!({
                 "scene": scene.name, "method": "sh", "bands": s.bands, "seconds": seconds,
-                "pages": m.pages.len(), "texels_per_metre": args.texels_per_metre,
+                "pages": m.pages.len(), "texels_per_metre": args.density(scene),
                 "samples": s.samples, "transfer": args.transfer,
                 "normal_mapped": s.normal_mapped, "detail": sl.detail, "shooting": sl.shooting,
             })

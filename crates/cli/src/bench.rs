@@ -293,7 +293,9 @@ fn bench_bake(scene: (&str, &LoadArgs), args: &BakeArgs, json: bool) -> Result<(
     let mut rows = serde_json::Map::new();
     println!(
         "bench bake {} at {} texels/m, {} threads",
-        s.name, args.texels_per_metre, threads
+        s.name,
+        args.density(&s),
+        threads
     );
     println!(
         "{:<10} {:>9} {:>9} {:>9} {:>10} {:>10} {:>12} {:>10} {:>9}",
@@ -348,7 +350,7 @@ fn bench_bake(scene: (&str, &LoadArgs), args: &BakeArgs, json: bool) -> Result<(
         println!(
             "{}",
             serde_json::json!({
-                "scene": s.name, "threads": threads, "texels_per_metre": args.texels_per_metre,
+                "scene": s.name, "threads": threads, "texels_per_metre": args.density(&s),
                 "bakers": rows,
             })
         );

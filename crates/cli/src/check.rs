@@ -123,8 +123,24 @@ pub fn run(c: &CheckArgs) -> Result<()> {
             .to_string_lossy()
             .into_owned();
         let (warnings, phong, lightmap) = match loaded {
-            Err(e) => (vec![format!("refused: {e}")], None, None),
+            Err(e) => (
+                vec![format!("refused: {e}").replace(&format!("{}: ", file.display()), "")],
+                None,
+                None,
+            ),
             Ok((_, notes)) => {
+                // Short forms for the table: the file is named in its row.
+                let spec = file.to_string_lossy().into_owned();
+                let notes = notes
+                    .iter()
+                    .map(|n| {
+                        if n.starts_with("notice:") && n.contains("default daylight") {
+                            "no lights: default daylight".to_string()
+                        } else {
+                            n.replace(&format!("{spec}: "), "")
+                        }
+                    })
+                    .collect();
                 let phong = relmse(
                     &file,
                     &["--technique", "phong-shadow-maps"],

@@ -211,7 +211,7 @@ fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
     };
     let bake = match family {
         Family::Lightmap => BakeArgs {
-            texels_per_metre: lightmap_density(scene).unwrap_or(16.0),
+            texels_per_metre: Some(lightmap_density(scene).unwrap_or(16.0)),
             samples: match quality {
                 Quality::Preview => 8,
                 Quality::Low => 64,
@@ -220,7 +220,7 @@ fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
             ..Default::default()
         },
         Family::Sh => BakeArgs {
-            texels_per_metre: 12.0,
+            texels_per_metre: Some(12.0),
             transfer_samples: match quality {
                 Quality::Preview => 32,
                 Quality::Low => 64,

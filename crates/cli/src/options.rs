@@ -306,9 +306,10 @@ pub fn apply_brdf(scene: &mut Scene, brdf: Option<BrdfModel>) {
 #[derive(Args, Clone, Debug)]
 pub struct BakeArgs {
     /// Light-map texel density (texels per metre). Walls need two texels of thickness for
-    /// bilinear sampling and four for bicubic, or light crosses them.
-    #[arg(long, default_value_t = 16.0)]
-    pub texels_per_metre: f32,
+    /// bilinear sampling and four for bicubic, or light crosses them. Default: 16, lowered for
+    /// large scenes so that their surfaces take at most 1 Mtexel (see `BakeArgs::density`).
+    #[arg(long)]
+    pub texels_per_metre: Option<f32>,
     /// Path-traced gathering: paths per texel.
     #[arg(id = "gather_samples", long = "gather-samples", default_value_t = 128)]
     pub samples: u32,
@@ -376,7 +377,7 @@ pub struct BakeArgs {
 impl Default for BakeArgs {
     fn default() -> Self {
         BakeArgs {
-            texels_per_metre: 16.0,
+            texels_per_metre: None,
             samples: 128,
             max_depth: 16,
             directional: false,
@@ -398,7 +399,20 @@ impl Default for BakeArgs {
     }
 }
 
+/// The texels the default density allows a scene's surfaces (a 1024² page's worth).
+pub const AUTO_TEXELS: f64 = 1024.0 * 1024.0;
+
 impl BakeArgs {
+    /// `--texels-per-metre`, or 16 lowered until the scene's area takes at most
+    /// [`AUTO_TEXELS`] (a city block at 16 texels per metre needed more than a 4096² page,
+    /// and the bake was refused).
+    pub fn density(&self, scene: &Scene) -> f32 {
+        self.texels_per_metre.unwrap_or_else(|| {
+            let area = lightlab_bake::layout::surface_area(scene).max(1e-6);
+            (16.0f64).min((AUTO_TEXELS / area).sqrt()) as f32
+        })
+    }
+
     /// The light-map settings for `method` on `scene`.
     pub fn settings(&self, scene: &Scene, method: Method) -> Result<BakeSettings> {
         let mut s = BakeSettings {
@@ -406,7 +420,7 @@ impl BakeArgs {
             seed: self.bake_seed,
             ..Default::default()
         };
-        s.layout.texels_per_metre = self.texels_per_metre;
+        s.layout.texels_per_metre = self.density(scene);
         s.gather.samples = self.samples;
         s.gather.max_depth = self.max_depth;
         s.gather.directional = self.directional;

@@ -38,9 +38,14 @@ pub const SUPPORTED_EXTENSIONS: [&str; 4] = [
 ];
 
 fn gltf_err(path: &Path, e: impl std::fmt::Display) -> SceneError {
+    // The gltf crate's validation errors say "invalid glTF: " themselves.
+    let message = e.to_string();
     SceneError::Gltf {
         path: path.into(),
-        message: e.to_string(),
+        message: message
+            .strip_prefix("invalid glTF: ")
+            .unwrap_or(&message)
+            .to_string(),
     }
 }
 

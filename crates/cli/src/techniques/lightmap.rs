@@ -48,7 +48,9 @@ pub fn lightmaps<'b>(req: &Request, bakes: &'b mut Bakes) -> Result<&'b Lightmap
                 let a = &req.args.bake;
                 eprintln!(
                     "no --baked folder: baking {} light-maps now (path, {} texels/m, {} samples)",
-                    req.scene.name, a.texels_per_metre, a.samples
+                    req.scene.name,
+                    a.density(req.scene),
+                    a.samples
                 );
                 bake_with_progress(req.scene, &bake_settings(req.scene, real_time_lights, a)?)?
             }

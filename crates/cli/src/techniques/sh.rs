@@ -67,7 +67,7 @@ pub fn data<'b>(req: &Request<'b>, bakes: &'b mut Bakes) -> Result<ShData<'b>> {
         }
         return Ok(ShData::Vertex(scene, &bakes.vertex[&key]));
     }
-    let tpm = req.args.bake.texels_per_metre;
+    let tpm = req.args.bake.density(req.scene);
     let key = match &req.args.baked {
         Some(dir) => format!("dir {}", dir.display()),
         None => format!("{} {tpm}", serde_json::to_string(&s)?),
