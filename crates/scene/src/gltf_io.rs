@@ -294,6 +294,7 @@ impl Importer<'_> {
             .or_else(|| self.doc.scenes().next())
             .ok_or_else(|| gltf_err(self.path, "the file contains no scene"))?;
         self.nodes(&gscene, default_material)?;
+        self.ignored_features();
         if self.skipped > 0 {
             self.scene.warnings.push(format!(
                 "skipped {} primitive instance(s) of points or lines (lightlab renders triangles)",
@@ -327,6 +328,46 @@ impl Importer<'_> {
             self.scene.environment = Some(Environment { image, intensity });
         }
         Ok(self.scene)
+    }
+
+    /// One warning per feature of the file that lightlab does not render yet, so that nothing
+    /// is dropped in silence.
+    fn ignored_features(&mut self) {
+        const EXTENSIONS: [(&str, &str); 5] = [
+            ("KHR_texture_transform", "texture transforms are ignored"),
+            (
+                "EXT_mesh_gpu_instancing",
+                "GPU instances are ignored (each node draws once)",
+            ),
+            (
+                "KHR_materials_transmission",
+                "transmission is ignored (surfaces are opaque)",
+            ),
+            ("KHR_materials_ior", "the index of refraction is ignored"),
+            ("KHR_materials_volume", "volumes are ignored"),
+        ];
+        let used: Vec<&str> = self.doc.extensions_used().collect();
+        for (ext, what) in EXTENSIONS {
+            if used.contains(&ext) {
+                self.scene.warnings.push(format!("{ext}: {what}"));
+            }
+        }
+        let prims = || {
+            self.doc
+                .meshes()
+                .flat_map(|m| m.primitives().collect::<Vec<_>>())
+        };
+        if prims().any(|p| p.get(&gltf::Semantic::Colors(0)).is_some()) {
+            self.scene
+                .warnings
+                .push("vertex colours (COLOR_0) are ignored".into());
+        }
+        if self.doc.skins().next().is_some() || prims().any(|p| p.morph_targets().next().is_some())
+        {
+            self.scene
+                .warnings
+                .push("skins and morph targets are ignored: meshes render in bind pose".into());
+        }
     }
 
     fn texture(&mut self, tex: gltf::Texture, srgb: bool) -> Result<usize, SceneError> {

@@ -127,6 +127,7 @@ const EXPECTED: &[(&str, &[&str])] = &[
     ("triangle_fan.gltf", &[]),
     ("triangle_strip.gltf", &[]),
     ("unknown_required_extension.gltf", &["EXT_made_up"]),
+    ("unsupported_features.gltf", &[]),
     (
         "uri_absolute.gltf",
         &["buffer 0", "outside", "--allow-outside-paths"],
@@ -181,7 +182,11 @@ fn every_hostile_file_is_refused_with_its_problem_named_or_loads() {
                     }
                 }
                 let warned = !scene.warnings.is_empty();
-                let expect = ["degenerate_triangle.gltf", "points_beside_triangles.gltf"];
+                let expect = [
+                    "degenerate_triangle.gltf",
+                    "points_beside_triangles.gltf",
+                    "unsupported_features.gltf",
+                ];
                 assert_eq!(
                     warned,
                     expect.contains(&name.as_str()),

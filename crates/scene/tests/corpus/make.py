@@ -152,6 +152,12 @@ g = base()
 g["meshes"][0]["primitives"].append({"attributes": {"POSITION": 0}, "mode": 0})
 files["points_beside_triangles.gltf"] = g
 
+# Features lightlab does not render yet: loaded, with one warning each.
+g = base()
+g["extensionsUsed"] += ["KHR_texture_transform", "EXT_mesh_gpu_instancing"]
+g["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = 1
+files["unsupported_features.gltf"] = g
+
 # A 3000-deep node chain (deeper than lightlab's 1024 levels).
 g = base()
 n0 = len(g["nodes"])
