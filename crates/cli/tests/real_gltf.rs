@@ -18,6 +18,24 @@ fn ok(o: &std::process::Output) -> String {
     e
 }
 
+/// `lightlab render --scene SCENE --technique T --width W [extra] -o OUT`, which must succeed;
+/// returns its stderr.
+fn render(scene: &str, technique: &str, width: u32, extra: &[&str], out: &Path) -> String {
+    let w = width.to_string();
+    let mut args = vec![
+        "render",
+        "--scene",
+        scene,
+        "--technique",
+        technique,
+        "--width",
+        &w,
+    ];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["-o", out.to_str().unwrap()]);
+    ok(&lightlab(&args))
+}
+
 fn relmse(a: &Path, b: &Path) -> f64 {
     let o = lightlab(&[
         "compare",
@@ -75,30 +93,8 @@ fn a_texture_on_texcoord_1_renders_alike_in_the_reference_and_on_the_gpu() {
     lightlab_scene::gltf_io::export(&checker_on_uv1(), &glb).unwrap();
     let (direct, gpu) = (tmp.path().join("direct.exr"), tmp.path().join("gpu.exr"));
     let g = glb.to_str().unwrap();
-    ok(&lightlab(&[
-        "render",
-        "--scene",
-        g,
-        "--technique",
-        "direct",
-        "--width",
-        "96",
-        "--spp",
-        "64",
-        "-o",
-        direct.to_str().unwrap(),
-    ]));
-    ok(&lightlab(&[
-        "render",
-        "--scene",
-        g,
-        "--technique",
-        "phong-shadow-maps",
-        "--width",
-        "96",
-        "-o",
-        gpu.to_str().unwrap(),
-    ]));
+    render(g, "direct", 96, &["--spp", "64"], &direct);
+    render(g, "phong-shadow-maps", 96, &[], &gpu);
     let e = relmse(&gpu, &direct);
     eprintln!("checker on TEXCOORD_1: phong-shadow-maps against direct, relMSE {e:.4}");
     assert!(e <= 0.01, "relMSE {e}");
@@ -132,19 +128,7 @@ fn a_file_without_lights_is_lit_by_daylight_with_a_notice_everywhere() {
     let notice = "has no lights";
     for technique in ["reference", "phong-shadow-maps"] {
         let out = tmp.path().join(format!("{technique}.exr"));
-        let e = ok(&lightlab(&[
-            "render",
-            "--scene",
-            g,
-            "--technique",
-            technique,
-            "--width",
-            "48",
-            "--spp",
-            "16",
-            "-o",
-            out.to_str().unwrap(),
-        ]));
+        let e = render(g, technique, 48, &["--spp", "16"], &out);
         assert!(
             e.contains(notice) && e.contains("Preetham"),
             "{technique}: {e}"
@@ -181,23 +165,8 @@ fn a_file_without_lights_is_lit_by_daylight_with_a_notice_everywhere() {
     // refused before any work.
     let out = tmp.path().join("sky.exr");
     let o = out.to_str().unwrap();
-    ok(&lightlab(&[
-        "render",
-        "--scene",
-        "cornell",
-        "--technique",
-        "direct",
-        "--env",
-        "sky",
-        "--sun",
-        "30,90,5",
-        "--width",
-        "16",
-        "--spp",
-        "4",
-        "-o",
-        o,
-    ]));
+    let sun = ["--env", "sky", "--sun", "30,90,5", "--spp", "4"];
+    render("cornell", "direct", 16, &sun, &out);
     for bad in ["90", "-5,10", "45,x", "45,10,-1"] {
         let r = lightlab(&[
             "render",
@@ -275,32 +244,8 @@ fn back_faces_and_the_near_plane_mean_the_same_in_the_reference_and_on_the_gpu()
         lightlab_scene::gltf_io::export(&faces_and_near_plane(double_sided), &glb).unwrap();
         let g = glb.to_str().unwrap();
         let (direct, gpu) = (tmp.path().join("d.exr"), tmp.path().join("g.exr"));
-        ok(&lightlab(&[
-            "render",
-            "--scene",
-            g,
-            "--technique",
-            "direct",
-            "--width",
-            "64",
-            "--spp",
-            "64",
-            "-o",
-            direct.to_str().unwrap(),
-        ]));
-        ok(&lightlab(&[
-            "render",
-            "--scene",
-            g,
-            "--technique",
-            "phong-shadow-maps",
-            "--ambient",
-            "none",
-            "--width",
-            "64",
-            "-o",
-            gpu.to_str().unwrap(),
-        ]));
+        render(g, "direct", 64, &["--spp", "64"], &direct);
+        render(g, "phong-shadow-maps", 64, &["--ambient", "none"], &gpu);
         let e = relmse(&gpu, &direct);
         eprintln!("double-sided {double_sided}: phong-shadow-maps against direct, relMSE {e:.4}");
         assert!(e < 0.02, "double-sided {double_sided}: relMSE {e}");

@@ -307,6 +307,24 @@ impl Material {
         self.emissive * self.emissive_strength
     }
 
+    /// Every texture the material reads.
+    pub fn texture_refs(&self) -> impl Iterator<Item = TextureRef> {
+        [
+            self.base_color_texture,
+            self.metallic_roughness_texture,
+            self.emissive_texture,
+            self.normal_texture,
+            self.transmission_texture,
+        ]
+        .into_iter()
+        .flatten()
+    }
+
+    /// Whether a texture of the material reads UV set `set`.
+    pub fn reads_uv_set(&self, set: u32) -> bool {
+        self.texture_refs().any(|r| r.uv_set == set)
+    }
+
     pub fn is_emissive(&self) -> bool {
         self.emission().max_element() > 0.0
     }

@@ -43,14 +43,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         }
     }
     for m in &scene.materials {
-        let refs = [
-            m.base_color_texture,
-            m.metallic_roughness_texture,
-            m.emissive_texture,
-            m.normal_texture,
-            m.transmission_texture,
-        ];
-        if let Some(r) = refs.iter().flatten().find(|r| r.uv_set > 1) {
+        if let Some(r) = m.texture_refs().find(|r| r.uv_set > 1) {
             return Err(content(
                 format!("material '{}'", m.name),
                 format!(
@@ -59,7 +52,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
                 ),
             ));
         }
-        if refs.iter().flatten().any(|r| r.texture >= ntex) {
+        if m.texture_refs().any(|r| r.texture >= ntex) {
             return Err(content(
                 format!("material '{}'", m.name),
                 "references a texture that does not exist".into(),
@@ -120,18 +113,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
                 format!("vertex {i} has a NaN or infinite position"),
             ));
         }
-        let uv_needed = {
-            let m = &scene.materials[mesh.material];
-            [
-                m.base_color_texture,
-                m.metallic_roughness_texture,
-                m.emissive_texture,
-                m.normal_texture,
-            ]
-            .iter()
-            .flatten()
-            .any(|r| r.uv_set == 0)
-        };
+        let uv_needed = scene.materials[mesh.material].reads_uv_set(0);
         if mesh.uv0.is_empty() {
             if uv_needed {
                 return Err(geo(
@@ -147,19 +129,7 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         if mesh.uv0.iter().any(|u| !u.is_finite()) {
             return Err(geo(&name, "TEXCOORD_0 has NaN or infinite values".into()));
         }
-        let uv1_needed = {
-            let m = &scene.materials[mesh.material];
-            [
-                m.base_color_texture,
-                m.metallic_roughness_texture,
-                m.emissive_texture,
-                m.normal_texture,
-                m.transmission_texture,
-            ]
-            .iter()
-            .flatten()
-            .any(|r| r.uv_set == 1)
-        };
+        let uv1_needed = scene.materials[mesh.material].reads_uv_set(1);
         if uv1_needed && mesh.uv1.is_none() {
             return Err(geo(
                 &name,
