@@ -17,6 +17,26 @@ use glam::{Mat3, Vec2, Vec3};
 use lightlab_scene::{Mesh, Scene};
 use serde::{Deserialize, Serialize};
 
+/// Where light-map UVs come from for a mesh that has an authored TEXCOORD_1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum LightmapUv {
+    /// The authored set when it passes [`check_authored_uv`], new UVs otherwise (with a note in
+    /// [`Layout::regenerated`]).
+    #[default]
+    Auto,
+    /// The authored set, unchecked.
+    Authored,
+    /// New UVs for every mesh.
+    Generate,
+}
+
+lightlab_core::named_enum!(LightmapUv, "light-map UV source", {
+    Auto => "auto",
+    Authored => "authored",
+    Generate => "generate",
+});
+
 /// How light-map UVs are laid out.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LayoutSettings {
@@ -28,6 +48,9 @@ pub struct LayoutSettings {
     pub padding: u32,
     /// Largest page side; a scene that needs more gets an error naming the density to lower.
     pub max_page_size: u32,
+    /// Authored TEXCOORD_1: checked, kept or replaced.
+    #[serde(default)]
+    pub lightmap_uv: LightmapUv,
 }
 
 impl Default for LayoutSettings {
@@ -36,6 +59,7 @@ impl Default for LayoutSettings {
             texels_per_metre: 32.0,
             padding: 3,
             max_page_size: 4096,
+            lightmap_uv: LightmapUv::Auto,
         }
     }
 }
@@ -67,6 +91,9 @@ pub struct Layout {
     pub charts: u32,
     /// Fraction of page texels covered by surface.
     pub utilization: f32,
+    /// Meshes whose authored TEXCOORD_1 was not used, with the reason (print as warnings).
+    #[serde(default)]
+    pub regenerated: Vec<String>,
 }
 
 impl Layout {
@@ -142,6 +169,67 @@ pub fn surface_area(scene: &Scene) -> f64 {
         .sum()
 }
 
+/// Whether an authored TEXCOORD_1 can hold light-maps: inside [0, 1], charts that do not
+/// overlap (under 1 % of the covered cells of a 256² grid covered twice; cells are counted
+/// by their centres strictly inside a triangle, so shared edges do not count), and under 1 %
+/// of the surface on triangles with no UV area. Err says what is wrong.
+pub fn check_authored_uv(mesh: &lightlab_scene::Mesh) -> Result<(), String> {
+    const GRID: usize = 256;
+    let Some(uv) = &mesh.uv1 else {
+        return Err("is missing".into());
+    };
+    if uv.len() != mesh.positions.len() {
+        return Err("has the wrong length".into());
+    }
+    if uv
+        .iter()
+        .any(|u| !u.is_finite() || u.min_element() < -1e-3 || u.max_element() > 1.001)
+    {
+        return Err("leaves [0, 1]".into());
+    }
+    let mut cover = vec![0u8; GRID * GRID];
+    let (mut world, mut flat) = (0.0f64, 0.0f64);
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| uv[i as usize] * GRID as f32);
+        let [pa, pb, pc] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+        let w = tri_area(pa, pb, pc) as f64;
+        world += w;
+        let det = (b - a).perp_dot(c - a);
+        if det.abs() < 1e-9 {
+            flat += w;
+            continue;
+        }
+        let lo = a.min(b).min(c).floor().max(Vec2::ZERO);
+        let hi = a.max(b).max(c).ceil().min(Vec2::splat(GRID as f32));
+        for y in lo.y as usize..hi.y as usize {
+            for x in lo.x as usize..hi.x as usize {
+                let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let l1 = (p - a).perp_dot(c - a) / det;
+                let l2 = (b - a).perp_dot(p - a) / det;
+                if l1 > 1e-6 && l2 > 1e-6 && 1.0 - l1 - l2 > 1e-6 {
+                    let k = &mut cover[y * GRID + x];
+                    *k = k.saturating_add(1);
+                }
+            }
+        }
+    }
+    let covered = cover.iter().filter(|&&k| k > 0).count();
+    let twice = cover.iter().filter(|&&k| k > 1).count();
+    if covered > 0 && twice as f64 > 0.01 * covered as f64 {
+        return Err(format!(
+            "overlaps itself ({:.0} % of its area is mapped more than once)",
+            100.0 * twice as f64 / covered as f64
+        ));
+    }
+    if world > 0.0 && flat > 0.01 * world {
+        return Err(format!(
+            "gives {:.0} % of the surface no area",
+            100.0 * flat / world
+        ));
+    }
+    Ok(())
+}
+
 /// Give every instanced mesh light-map UVs and return the layout. Meshes are rewritten where
 /// the unwrap splits vertices along chart seams (all attributes are carried over).
 pub fn unwrap_scene(scene: &mut Scene, settings: &LayoutSettings) -> Result<Layout, BakeError> {
@@ -163,12 +251,37 @@ pub fn unwrap_scene(scene: &mut Scene, settings: &LayoutSettings) -> Result<Layo
     }
     let mut instances = vec![None; scene.instances.len()];
     let mut pages: Vec<[u32; 2]> = vec![];
-    // Meshes to unwrap: instanced, with triangles, without authored UVs.
+    // Meshes to unwrap: instanced, with triangles, without usable authored UVs.
+    let mut regenerated = vec![];
     let todo: Vec<usize> = (0..scene.meshes.len())
         .filter(|&m| {
-            !per_mesh[m].is_empty()
-                && scene.meshes[m].triangle_count() > 0
-                && scene.meshes[m].uv1.is_none()
+            let mesh = &scene.meshes[m];
+            if per_mesh[m].is_empty() || mesh.triangle_count() == 0 {
+                return false;
+            }
+            match (mesh.uv1.is_some(), settings.lightmap_uv) {
+                (false, _) | (true, LightmapUv::Generate) => true,
+                (true, LightmapUv::Authored) => false,
+                (true, LightmapUv::Auto) => match check_authored_uv(mesh) {
+                    Ok(()) => false,
+                    // Its textures read the authored set: replacing it would break them.
+                    Err(why) if scene.materials[mesh.material].reads_uv_set(1) => {
+                        regenerated.push(format!(
+                            "mesh '{}': authored TEXCOORD_1 {why}, but its textures read it, so \
+                             it is kept for light-maps too (expect seams)",
+                            mesh.name
+                        ));
+                        false
+                    }
+                    Err(why) => {
+                        regenerated.push(format!(
+                            "mesh '{}': authored TEXCOORD_1 {why}; light-map UVs generated",
+                            mesh.name
+                        ));
+                        true
+                    }
+                },
+            }
         })
         .collect();
     // Refuse a request that cannot fit before the unwrap allocates its raster.
@@ -308,6 +421,7 @@ pub fn unwrap_scene(scene: &mut Scene, settings: &LayoutSettings) -> Result<Layo
         } else {
             0.0
         },
+        regenerated,
     })
 }
 
@@ -376,12 +490,68 @@ mod tests {
     }
 
     #[test]
+    fn authored_uvs_are_checked_kept_or_replaced() {
+        let base = lightlab_scene::builtin::builtin("cornell").unwrap();
+        // A block of several faces, each of which maps its TEXCOORD_0 onto the whole square.
+        let m = (0..base.meshes.len())
+            .max_by_key(|&k| base.meshes[k].triangle_count())
+            .unwrap();
+        assert!(base.instances.iter().any(|i| i.mesh == m));
+        // A texture set as TEXCOORD_1 (TEXCOORD_0 fitted into [0, 1]): the faces overlap.
+        let uv0 = &base.meshes[m].uv0;
+        let (lo, hi) = uv0
+            .iter()
+            .fold((Vec2::MAX, Vec2::MIN), |(l, h), u| (l.min(*u), h.max(*u)));
+        let texture_set: Vec<Vec2> = uv0.iter().map(|u| (*u - lo) / (hi - lo)).collect();
+        let mut s = base.clone();
+        s.meshes[m].uv1 = Some(texture_set.clone());
+        let e = check_authored_uv(&s.meshes[m]).unwrap_err();
+        assert!(e.contains("overlaps"), "{e}");
+        let l = unwrap_scene(&mut s, &LayoutSettings::default()).unwrap();
+        assert!(
+            l.regenerated.iter().any(|r| r.contains("generated")),
+            "{:?}",
+            l.regenerated
+        );
+        assert_ne!(s.meshes[m].uv1, Some(texture_set.clone()));
+        // Good authored UVs pass the check: the generated layout of that same mesh does.
+        let mut g = base.clone();
+        unwrap_scene(&mut g, &LayoutSettings::default()).unwrap();
+        check_authored_uv(&g.meshes[m]).unwrap();
+        // Outside [0, 1], or collapsed: refused by the check.
+        let mut out = g.meshes[m].clone();
+        out.uv1.as_mut().unwrap()[0].x = 1.5;
+        assert!(check_authored_uv(&out).unwrap_err().contains("[0, 1]"));
+        let mut flat = g.meshes[m].clone();
+        flat.uv1 = Some(vec![Vec2::splat(0.5); flat.positions.len()]);
+        assert!(check_authored_uv(&flat).unwrap_err().contains("no area"));
+        // `generate` replaces even good UVs; `authored` keeps even bad ones.
+        let settings = |lightmap_uv| LayoutSettings {
+            lightmap_uv,
+            ..Default::default()
+        };
+        let mut a = base.clone();
+        a.meshes[m].uv1 = Some(texture_set.clone());
+        let l = unwrap_scene(&mut a, &settings(LightmapUv::Authored)).unwrap();
+        assert!(l.regenerated.is_empty());
+        assert_eq!(a.meshes[m].uv1, Some(texture_set));
+        let mut r = g.clone();
+        let before = r.meshes[m].uv1.clone();
+        unwrap_scene(&mut r, &settings(LightmapUv::Generate)).unwrap();
+        assert!(r.meshes[m].uv1.is_some() && r.meshes[m].positions.len() >= before.unwrap().len());
+    }
+
+    #[test]
     fn authored_uvs_are_kept_and_bad_settings_are_errors() {
         let mut s = lightlab_scene::builtin::builtin("cornell").unwrap();
         let m = s.instances[0].mesh;
         let uv: Vec<Vec2> = s.meshes[m].uv0.iter().map(|u| *u * 0.9 + 0.05).collect();
         s.meshes[m].uv1 = Some(uv.clone());
-        let l = unwrap_scene(&mut s, &LayoutSettings::default()).unwrap();
+        let authored = LayoutSettings {
+            lightmap_uv: LightmapUv::Authored,
+            ..Default::default()
+        };
+        let l = unwrap_scene(&mut s, &authored).unwrap();
         assert_eq!(s.meshes[m].uv1.as_ref().unwrap(), &uv);
         let r = l.instances[0].unwrap();
         assert_eq!(r.scale, [1.0, 1.0]);

@@ -112,10 +112,7 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
     use lightlab_bake::sh_folder::write_sh;
     let s = args.transfer_settings()?;
     let kind = s.kind;
-    let layout = lightlab_bake::layout::LayoutSettings {
-        texels_per_metre: args.density(scene),
-        ..Default::default()
-    };
+    let layout = args.layout(scene);
     eprintln!(
         "baking {} SH light-maps: {} bands, {:?}, {} directions per texel, {} texels/m",
         scene.name,
@@ -128,6 +125,7 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
     let sl = with_progress_bar(format!("{} sh", scene.name), |progress| {
         bake_sh_lightmaps(scene, &layout, &s, progress)
     })?;
+    crate::techniques::lightmap::warn_regenerated(&sl.layout);
     let seconds = t.elapsed().as_secs_f64();
     if let Some(d) = &sl.detail {
         eprintln!(

@@ -332,6 +332,11 @@ pub struct BakeArgs {
     /// indirect-only, realtime (comma-separated; default: all baked).
     #[arg(long, value_delimiter = ',')]
     pub light_mode: Vec<String>,
+    /// Light-map UVs of meshes with an authored TEXCOORD_1: `auto` keeps it when it is inside
+    /// [0, 1] with charts that do not overlap, and generates new UVs otherwise (with a
+    /// warning); `authored` keeps it unchecked; `generate` always makes new ones.
+    #[arg(long, default_value = "auto")]
+    pub lightmap_uv: lightlab_bake::layout::LightmapUv,
     /// Also write tone-reproduced PNG pages (Ward Larson histogram adjustment, gamma 2).
     #[arg(long)]
     pub png: bool,
@@ -378,6 +383,7 @@ impl Default for BakeArgs {
     fn default() -> Self {
         BakeArgs {
             texels_per_metre: None,
+            lightmap_uv: Default::default(),
             samples: 128,
             max_depth: 16,
             directional: false,
@@ -403,6 +409,15 @@ impl Default for BakeArgs {
 pub const AUTO_TEXELS: f64 = 1024.0 * 1024.0;
 
 impl BakeArgs {
+    /// The light-map layout settings of these options on `scene`.
+    pub fn layout(&self, scene: &Scene) -> lightlab_bake::layout::LayoutSettings {
+        lightlab_bake::layout::LayoutSettings {
+            texels_per_metre: self.density(scene),
+            lightmap_uv: self.lightmap_uv,
+            ..Default::default()
+        }
+    }
+
     /// `--texels-per-metre`, or 16 lowered until the scene's area takes at most
     /// [`AUTO_TEXELS`] (a city block at 16 texels per metre needed more than a 4096² page,
     /// and the bake was refused).
@@ -420,7 +435,7 @@ impl BakeArgs {
             seed: self.bake_seed,
             ..Default::default()
         };
-        s.layout.texels_per_metre = self.density(scene);
+        s.layout = self.layout(scene);
         s.gather.samples = self.samples;
         s.gather.max_depth = self.max_depth;
         s.gather.directional = self.directional;

@@ -264,3 +264,37 @@ fn back_faces_and_the_near_plane_mean_the_same_in_the_reference_and_on_the_gpu()
         assert_eq!(centre > 0.01, !double_sided, "centre {centre}");
     }
 }
+
+#[test]
+fn an_overlapping_texcoord_1_is_replaced_for_light_maps_with_a_warning() {
+    let tmp = tempfile::tempdir().unwrap();
+    // `shadows` with TEXCOORD_1 = each mesh's TEXCOORD_0 fitted into [0, 1]: a texture set,
+    // whose faces overlap (the box's six faces share one square).
+    let mut s = lightlab_scene::builtin::builtin("shadows").unwrap();
+    for m in &mut s.meshes {
+        let (lo, hi) = m
+            .uv0
+            .iter()
+            .fold((Vec2::MAX, Vec2::MIN), |(l, h), u| (l.min(*u), h.max(*u)));
+        let size = (hi - lo).max(Vec2::splat(1e-6));
+        m.uv1 = Some(m.uv0.iter().map(|u| (*u - lo) / size).collect());
+    }
+    let glb = tmp.path().join("uv1.glb");
+    lightlab_scene::gltf_io::export(&s, &glb).unwrap();
+    let g = glb.to_str().unwrap();
+    let reference = tmp.path().join("ref.exr");
+    render(g, "reference", 48, &["--spp", "64"], &reference);
+    let mut errors = vec![];
+    for (mode, warned) in [("auto", true), ("authored", false)] {
+        let out = tmp.path().join(format!("{mode}.exr"));
+        let bake = ["--lightmap-uv", mode, "--gather-samples", "32"];
+        let e = render(g, "lightmap", 48, &bake, &out);
+        assert_eq!(e.contains("light-map UVs generated"), warned, "{mode}: {e}");
+        errors.push(relmse(&out, &reference));
+    }
+    eprintln!(
+        "texture set as TEXCOORD_1: lightmap vs reference relMSE {:.4} (auto) {:.4} (authored)",
+        errors[0], errors[1]
+    );
+    assert!(errors[0] < 0.5 * errors[1], "{errors:?}");
+}

@@ -14,10 +14,19 @@ use lightlab_scene::Scene;
 
 /// Bake light-maps with a progress bar on stderr.
 pub fn bake_with_progress(scene: &Scene, settings: &BakeSettings) -> Result<Lightmaps> {
-    with_progress_bar(
+    let lm = with_progress_bar(
         format!("{} {}", scene.name, settings.method.name()),
         |progress| bake_lightmaps(scene, settings, progress),
-    )
+    )?;
+    warn_regenerated(&lm.layout);
+    Ok(lm)
+}
+
+/// Print the layout's notes on authored TEXCOORD_1 sets it did not use as warnings.
+pub fn warn_regenerated(layout: &lightlab_bake::layout::Layout) {
+    for r in &layout.regenerated {
+        eprintln!("lightlab: warning: {r}");
+    }
 }
 
 /// The bake settings of a light-map technique: all lights baked for `lightmap`; for

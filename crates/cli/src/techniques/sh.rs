@@ -70,7 +70,11 @@ pub fn data<'b>(req: &Request<'b>, bakes: &'b mut Bakes) -> Result<ShData<'b>> {
     let tpm = req.args.bake.density(req.scene);
     let key = match &req.args.baked {
         Some(dir) => format!("dir {}", dir.display()),
-        None => format!("{} {tpm}", serde_json::to_string(&s)?),
+        None => format!(
+            "{} {tpm} {}",
+            serde_json::to_string(&s)?,
+            req.args.bake.lightmap_uv
+        ),
     };
     if !bakes.sh.contains_key(&key) {
         let stored = match &req.args.baked {
@@ -81,11 +85,9 @@ pub fn data<'b>(req: &Request<'b>, bakes: &'b mut Bakes) -> Result<ShData<'b>> {
                      directions, {tpm} texels/m)",
                     scene.name, s.bands, s.kind, s.samples
                 );
-                let layout = lightlab_bake::layout::LayoutSettings {
-                    texels_per_metre: tpm,
-                    ..Default::default()
-                };
+                let layout = req.args.bake.layout(req.scene);
                 let sl = bake_sh_lightmaps(scene, &layout, &s, &lightlab_bake::no_progress)?;
+                super::lightmap::warn_regenerated(&sl.layout);
                 (sl, None)
             }
         };
