@@ -144,55 +144,8 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
                 "TEXCOORD_1 is inconsistent or not finite".into(),
             ));
         }
-        // Degenerate triangles: a repeated index, or an area below a tiny fraction of the
-        // mesh's own size (relative, so a node's uniform scale does not change the verdict).
-        let (lo, hi) = mesh
-            .positions
-            .iter()
-            .fold((glam::Vec3::MAX, glam::Vec3::MIN), |(l, h), p| {
-                (l.min(*p), h.max(*p))
-            });
-        // A mesh beyond the coordinate limit is refused below for that, not judged here.
-        let extent = (hi - lo).as_dvec3();
-        let floor = if extent.max_element() > MAX_COORDINATE as f64 {
-            0.0
-        } else {
-            DEGENERATE_AREA as f64 * extent.length_squared()
-        };
-        let degenerate = |t: &[u32]| {
-            let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize].as_dvec3());
-            t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || (b - a).cross(c - a).length() <= floor
-        };
-        let count = mesh
-            .indices
-            .chunks_exact(3)
-            .filter(|t| degenerate(t))
-            .count();
-        if count > 0 {
-            let total = mesh.indices.len() / 3;
-            if opts.strict {
-                return Err(geo(
-                    &name,
-                    format!(
-                        "{count} of {total} triangles are degenerate (zero area); without \
-                         --strict they are dropped with a warning"
-                    ),
-                ));
-            }
-            let kept: Vec<u32> = mesh
-                .indices
-                .chunks_exact(3)
-                .filter(|t| !degenerate(t))
-                .flatten()
-                .copied()
-                .collect();
-            if kept.is_empty() {
-                return Err(geo(&name, "all triangles have zero area".into()));
-            }
-            mesh.indices = kept;
-            scene.warnings.push(format!(
-                "mesh '{name}': dropped {count} of {total} degenerate (zero-area) triangles"
-            ));
+        if let Some(warning) = drop_degenerate(mesh, opts.strict).map_err(|e| geo(&name, e))? {
+            scene.warnings.push(warning);
         }
         if mesh.normals.is_empty() {
             mesh.compute_normals();
@@ -268,6 +221,61 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         ));
     }
     Ok(())
+}
+
+/// Drop the mesh's degenerate triangles: a repeated index, or twice the area at most
+/// [`DEGENERATE_AREA`] × its bounding-box diagonal² (relative, so a node's uniform scale does
+/// not change the verdict). Returns the warning to give; Err with `strict`, or when nothing
+/// would be left.
+fn drop_degenerate(mesh: &mut crate::Mesh, strict: bool) -> Result<Option<String>, String> {
+    let (lo, hi) = mesh
+        .positions
+        .iter()
+        .fold((glam::Vec3::MAX, glam::Vec3::MIN), |(l, h), p| {
+            (l.min(*p), h.max(*p))
+        });
+    // A mesh beyond the coordinate limit is refused later for that, not judged here.
+    let extent = (hi - lo).as_dvec3();
+    let floor = if extent.max_element() > MAX_COORDINATE as f64 {
+        0.0
+    } else {
+        DEGENERATE_AREA as f64 * extent.length_squared()
+    };
+    let positions = &mesh.positions;
+    let degenerate = |t: &[u32]| {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions[i as usize].as_dvec3());
+        t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || (b - a).cross(c - a).length() <= floor
+    };
+    let count = mesh
+        .indices
+        .chunks_exact(3)
+        .filter(|t| degenerate(t))
+        .count();
+    if count == 0 {
+        return Ok(None);
+    }
+    let total = mesh.indices.len() / 3;
+    if strict {
+        return Err(format!(
+            "{count} of {total} triangles are degenerate (zero area); without --strict they \
+             are dropped with a warning"
+        ));
+    }
+    let kept: Vec<u32> = mesh
+        .indices
+        .chunks_exact(3)
+        .filter(|t| !degenerate(t))
+        .flatten()
+        .copied()
+        .collect();
+    if kept.is_empty() {
+        return Err("all triangles have zero area".into());
+    }
+    mesh.indices = kept;
+    Ok(Some(format!(
+        "mesh '{}': dropped {count} of {total} degenerate (zero-area) triangles",
+        mesh.name
+    )))
 }
 
 /// Normals of unit length: a zero-length normal (which shaded as NaN on the GPU) takes the
