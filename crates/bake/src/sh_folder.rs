@@ -230,41 +230,30 @@ pub fn write_vertex_transfer(
     seconds: f64,
 ) -> Result<VertexManifest, crate::BakeError> {
     crate::folder::write(dir, |dir| {
-        write_vertex_files(vt, scene, settings, dir, scene_name, seconds)
-    })
-}
-
-fn write_vertex_files(
-    vt: &VertexTransfer,
-    scene: &Scene,
-    settings: &TransferSettings,
-    dir: &std::path::Path,
-    scene_name: &str,
-    seconds: f64,
-) -> Result<VertexManifest, crate::BakeError> {
-    let nc = sh::num_coeffs(vt.bands);
-    let mut instances = vec![];
-    for (i, (inst, data)) in scene.instances.iter().zip(&vt.instances).enumerate() {
-        let file = format!("transfer-{i}.bin");
-        let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
-        crate::output::write_bytes(&dir.join(&file), &bytes)?;
-        instances.push(VertexFile {
-            name: inst.name.clone(),
-            vertices: data.len() / nc,
-            file,
-        });
-    }
-    Ok(VertexManifest {
-        format: VERTEX_FORMAT.into(),
-        version: VERTEX_VERSION,
-        scene: scene_name.into(),
-        quantity:
-            "diffuse transfer per vertex t_i = (1/pi) int V max(n.w,0) Y_i dw: E/pi = sum l_i t_i"
-                .into(),
-        bands: vt.bands,
-        transfer: *settings,
-        instances,
-        seconds,
+        let nc = sh::num_coeffs(vt.bands);
+        let mut instances = vec![];
+        for (i, (inst, data)) in scene.instances.iter().zip(&vt.instances).enumerate() {
+            let file = format!("transfer-{i}.bin");
+            let bytes: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
+            crate::output::write_bytes(&dir.join(&file), &bytes)?;
+            instances.push(VertexFile {
+                name: inst.name.clone(),
+                vertices: data.len() / nc,
+                file,
+            });
+        }
+        Ok(VertexManifest {
+            format: VERTEX_FORMAT.into(),
+            version: VERTEX_VERSION,
+            scene: scene_name.into(),
+            quantity:
+                "diffuse transfer per vertex t_i = (1/pi) int V max(n.w,0) Y_i dw: E/pi = sum l_i t_i"
+                    .into(),
+            bands: vt.bands,
+            transfer: *settings,
+            instances,
+            seconds,
+        })
     })
 }
 

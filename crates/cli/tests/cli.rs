@@ -1,22 +1,10 @@
 //! The command-line contract, exercised on the real binary.
 
+mod common;
+
+use common::{lightlab, stderr, stdout};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn lightlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lightlab"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
+use std::process::Command;
 
 #[test]
 fn scenes_lists_one_name_per_line() {

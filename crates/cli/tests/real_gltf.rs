@@ -3,20 +3,10 @@
 use glam::{Vec2, Vec3, Vec4};
 use lightlab_scene::{Scene, Texture, TextureRef};
 use std::path::Path;
-use std::process::Command;
 
-fn lightlab(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_lightlab"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+mod common;
 
-fn ok(o: &std::process::Output) -> String {
-    let e = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(o.status.success(), "{e}");
-    e
-}
+use common::{lightlab, ok};
 
 /// `lightlab render --scene SCENE --technique T --width W [extra] -o OUT`, which must succeed;
 /// returns its stderr.

@@ -2,6 +2,9 @@
 //! the complete old bake or the complete new one, never a mix, and leaves no temporaries after
 //! SIGINT.
 
+mod common;
+
+use common::lightlab;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -170,13 +173,6 @@ fn bake_folders_refuse_what_they_did_not_write() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("neither empty nor a bake folder"));
     assert_eq!(std::fs::read(mine.join("notes.txt")).unwrap(), b"keep");
-}
-
-fn lightlab(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_lightlab"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 fn corpus(name: &str) -> String {
