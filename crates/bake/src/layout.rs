@@ -450,6 +450,13 @@ fn remap_mesh(mesh: &mut Mesh, out: &uvunwrap::OutputMesh) {
             .map(|o| mesh.uv0[o.xref as usize])
             .collect();
     }
+    if !mesh.colors.is_empty() {
+        mesh.colors = out
+            .vertices
+            .iter()
+            .map(|o| mesh.colors[o.xref as usize])
+            .collect();
+    }
     mesh.uv1 = Some(out.vertices.iter().map(|o| Vec2::from(o.uv)).collect());
     mesh.indices = out.indices.clone();
 }

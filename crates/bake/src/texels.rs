@@ -273,10 +273,11 @@ pub fn normal_mapped_normal(
     Some(sum.normalize_or(t.ns))
 }
 
-/// Diffuse reflectance of a material at a UV: (1−metallic)·base colour (× textures).
-pub fn albedo(scene: &Scene, material: usize, uv: lightlab_scene::Uv) -> Vec3 {
+/// Diffuse reflectance of a material at a surface point: (1−metallic)·base colour (× vertex
+/// colour × textures).
+pub fn albedo(scene: &Scene, material: usize, uv: lightlab_scene::Attrs) -> Vec3 {
     let m = &scene.materials[material];
-    let mut base = m.base_color;
+    let mut base = m.base_color * uv.color;
     if let Some(r) = m.base_color_texture {
         base *= scene.sample(r, uv);
     }

@@ -33,7 +33,7 @@ pub struct LightmapHit {
     pub p: Vec3,
     pub material: usize,
     /// The texture coordinates (both sets) at the hit.
-    pub tex_uv: lightlab_scene::Uv,
+    pub tex_uv: lightlab_scene::Attrs,
     /// Whether the camera sees the front side.
     pub front: bool,
 }
@@ -81,7 +81,7 @@ pub fn interpolate(values: &[Vec2], mesh: &Mesh, tri: usize, bary: Vec2) -> Vec2
 }
 
 /// Both texture-coordinate sets at a hit (zero for meshes without UVs).
-pub fn hit_uv(mesh: &Mesh, tri: usize, bary: Vec2) -> lightlab_scene::Uv {
+pub fn hit_uv(mesh: &Mesh, tri: usize, bary: Vec2) -> lightlab_scene::Attrs {
     let idx = [0, 1, 2].map(|k| mesh.indices[tri * 3 + k] as usize);
     mesh.uv_at(idx, [1.0 - bary.x - bary.y, bary.x, bary.y])
 }

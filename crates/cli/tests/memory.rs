@@ -30,10 +30,7 @@ fn textured_scene(dir: &std::path::Path) -> std::path::PathBuf {
             true,
         ));
         let mut m = Material::diffuse(&format!("m{k}"), Vec3::ONE);
-        m.base_color_texture = Some(TextureRef {
-            texture: k,
-            uv_set: 0,
-        });
+        m.base_color_texture = Some(TextureRef::new(k, 0));
         let mat = s.add_material(m);
         let x = k as f32 * 2.2;
         let mut mesh = quad_facing(

@@ -69,10 +69,7 @@ fn checker_on_uv1() -> Scene {
     mesh.uv0 = vec![Vec2::ZERO; mesh.positions.len()];
     let m = mesh.material;
     s.materials[m].base_color = Vec4::ONE;
-    s.materials[m].base_color_texture = Some(TextureRef {
-        texture: s.textures.len() - 1,
-        uv_set: 1,
-    });
+    s.materials[m].base_color_texture = Some(TextureRef::new(s.textures.len() - 1, 1));
     s
 }
 
@@ -103,6 +100,88 @@ fn a_texture_on_texcoord_1_renders_alike_in_the_reference_and_on_the_gpu() {
         "no checker in the reference: σ {} mean {mean}",
         var.sqrt()
     );
+}
+
+/// `checker_on_uv1` with vertex colours on every mesh and, with `transformed`, a
+/// KHR_texture_transform on the checker; without it, the floor's TEXCOORD_1 carries the same
+/// transform baked into its coordinates.
+fn transformed_and_coloured(transformed: bool) -> Scene {
+    use lightlab_scene::UvTransform;
+    let mut s = checker_on_uv1();
+    let t = UvTransform::new(Vec2::new(0.3, -0.2), 0.5, Vec2::new(2.0, 1.5));
+    let floor = s.meshes.iter().position(|m| m.name == "floor").unwrap();
+    let m = s.meshes[floor].material;
+    if transformed {
+        s.materials[m]
+            .base_color_texture
+            .as_mut()
+            .unwrap()
+            .transform = t;
+    } else {
+        let uv1 = s.meshes[floor].uv1.as_mut().unwrap();
+        uv1.iter_mut().for_each(|u| *u = t.apply(*u));
+    }
+    for mesh in &mut s.meshes {
+        mesh.colors = mesh
+            .positions
+            .iter()
+            .map(|p| Vec4::new(0.6 + 0.4 * p.x.sin(), 0.7, 0.6 + 0.4 * p.z.cos(), 1.0))
+            .collect();
+    }
+    s
+}
+
+#[test]
+fn texture_transforms_and_vertex_colours_render_alike_in_the_reference_and_on_the_gpu() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = |name: &str| tmp.path().join(name);
+    let mut files = vec![];
+    for (name, scene) in [
+        ("transformed", transformed_and_coloured(true)),
+        ("baked", transformed_and_coloured(false)),
+        ("plain", checker_on_uv1()),
+    ] {
+        let glb = path(&format!("{name}.glb"));
+        lightlab_scene::gltf_io::export(&scene, &glb).unwrap();
+        let exr = path(&format!("{name}.exr"));
+        render(glb.to_str().unwrap(), "direct", 96, &["--spp", "32"], &exr);
+        files.push((glb, exr));
+    }
+    // The transform applied at sampling equals the same transform baked into the UVs.
+    let same = relmse(&files[0].1, &files[1].1);
+    // Transform and colours change the image.
+    let changed = relmse(&files[0].1, &files[2].1);
+    let gpu = path("gpu.exr");
+    render(
+        files[0].0.to_str().unwrap(),
+        "phong-shadow-maps",
+        96,
+        &[],
+        &gpu,
+    );
+    let e = relmse(&gpu, &files[0].1);
+    eprintln!(
+        "texture transform + COLOR_0: sampled vs baked UVs {same:.2e}, vs plain {changed:.3}, \
+         phong-shadow-maps vs direct {e:.4}"
+    );
+    if let Ok(keep) = std::env::var("LIGHTLAB_KEEP") {
+        for (from, to) in [
+            (&files[0].1, "tt-direct.exr"),
+            (&gpu, "tt-gpu.exr"),
+            (&files[0].0, "tt.glb"),
+        ] {
+            let _ = std::fs::copy(from, Path::new(&keep).join(to));
+        }
+    }
+    assert!(
+        same < 1e-4,
+        "transform at sampling vs baked UVs: relMSE {same}"
+    );
+    assert!(
+        changed > 0.02,
+        "transform and colours change nothing: {changed}"
+    );
+    assert!(e <= 0.01, "phong-shadow-maps against direct: relMSE {e}");
 }
 
 #[test]

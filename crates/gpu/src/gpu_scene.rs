@@ -18,10 +18,13 @@ pub struct Vertex {
     pub tangent: [f32; 4],
     pub uv0: [f32; 2],
     pub uv1: [f32; 2],
+    /// COLOR_0 as 16-bit unorm (glTF's range, [0, 1]); white without.
+    pub color: [u16; 4],
 }
 
-pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
-    0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Float32x2
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Float32x2,
+    5 => Unorm16x4
 ];
 
 pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
@@ -290,6 +293,10 @@ impl Geometry {
                             None => u,
                         }
                     },
+                    color: mesh.colors.get(i).map_or([u16::MAX; 4], |c| {
+                        c.to_array()
+                            .map(|x| (x.clamp(0.0, 1.0) * 65535.0).round() as u16)
+                    }),
                 });
             }
             let first_index = indices.len() as u32;
@@ -397,15 +404,22 @@ fn gpu_material(m: &lightlab_scene::Material) -> GpuMaterial {
     ];
     let mut flags = 0u32;
     let mut uv_sets = 0u32;
-    if let Some(r) = m.transmission_texture {
+    let mut uv_transform = [[0.0f32; 4]; 12];
+    let mut put = |i: usize, r: &lightlab_scene::TextureRef| {
+        uv_sets |= (r.uv_set & 1) << i;
+        let [a, b] = r.transform.0;
+        uv_transform[2 * i] = [a[0], a[1], a[2], 0.0];
+        uv_transform[2 * i + 1] = [b[0], b[1], b[2], 0.0];
+    };
+    if let Some(r) = &m.transmission_texture {
         // Bit 5 (bit 4 is double-sided).
         flags |= 32;
-        uv_sets |= (r.uv_set & 1) << 5;
+        put(5, r);
     }
     for (i, r) in refs.iter().enumerate() {
         if let Some(r) = r {
             flags |= 1 << i;
-            uv_sets |= (r.uv_set & 1) << i;
+            put(i, r);
         }
     }
     if m.double_sided {
@@ -437,6 +451,7 @@ fn gpu_material(m: &lightlab_scene::Material) -> GpuMaterial {
         pad0: 0.0,
         pad1: 0.0,
         pad2: 0.0,
+        uv_transform,
     }
 }
 

@@ -144,6 +144,8 @@ pub struct GpuMaterial {
     pub pad0: f32,
     pub pad1: f32,
     pub pad2: f32,
+    /// The KHR_texture_transform of each texture (WGSL comment), two rows each.
+    pub uv_transform: [[f32; 4]; 12],
 }
 
 /// The WGSL source that declares these structs.
@@ -266,7 +268,8 @@ mod tests {
                     sway,
                     pad0,
                     pad1,
-                    pad2
+                    pad2,
+                    uv_transform
                 ),
             ),
         ];

@@ -46,10 +46,7 @@ fn ridged_floor(tilt: f32) -> Scene {
         .collect::<Vec<Vec4>>();
     let mut m = Material::diffuse("white", Vec3::splat(0.8));
     m.brdf = BrdfModel::Lambert;
-    m.normal_texture = Some(TextureRef {
-        texture: 0,
-        uv_set: 0,
-    });
+    m.normal_texture = Some(TextureRef::new(0, 0));
     Scene {
         name: "ridged-floor".into(),
         meshes: vec![floor],

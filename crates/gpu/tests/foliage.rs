@@ -37,10 +37,7 @@ fn backlit_leaf(with_map: bool) -> Scene {
         alpha_mode: AlphaMode::Opaque,
         double_sided: true,
         transmission: 0.8,
-        transmission_texture: with_map.then_some(TextureRef {
-            texture: 0,
-            uv_set: 0,
-        }),
+        transmission_texture: with_map.then_some(TextureRef::new(0, 0)),
         brdf: BrdfModel::Lambert,
         ..Default::default()
     });

@@ -72,11 +72,10 @@ impl Scene {
             if let Some(r) = mat.emissive_texture
                 && let Some(tex) = self.textures.get(r.texture)
             {
-                let uvs = match (&mesh.uv1, r.uv_set) {
-                    (Some(uv1), 1) => uv1,
-                    _ => &mesh.uv0,
-                };
-                if let Some(mean) = texture_mean(tex, uvs, &mesh.indices, &tris) {
+                let uvs: Vec<_> = (0..mesh.positions.len())
+                    .map(|i| r.uv(&mesh.attrs_of(i)))
+                    .collect();
+                if let Some(mean) = texture_mean(tex, &uvs, &mesh.indices, &tris) {
                     radiance *= mean;
                 }
                 if radiance.max_element() <= 0.0 {
@@ -238,10 +237,7 @@ mod tests {
         mesh.uv0 = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
             .map(glam::Vec2::from_array)
             .to_vec();
-        s.materials[lamp].emissive_texture = Some(crate::TextureRef {
-            texture: s.textures.len() - 1,
-            uv_set: 0,
-        });
+        s.materials[lamp].emissive_texture = Some(crate::TextureRef::new(s.textures.len() - 1, 0));
         let e = s.planar_emitters()[0];
         let want = Vec3::new(17.0, 12.0, 4.0) * Vec3::new(0.5, 0.25, 0.125);
         assert!(

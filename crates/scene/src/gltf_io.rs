@@ -1,9 +1,11 @@
 //! glTF 2.0 import and export (`.gltf` with external or embedded buffers, and `.glb`).
 //!
 //! Import reads the default scene's node tree (world transforms composed), triangle primitives
-//! (POSITION, NORMAL, TANGENT, TEXCOORD_0/1, indices), metallic–roughness materials with
-//! KHR_materials_emissive_strength, KHR_materials_specular and
-//! KHR_materials_diffuse_transmission, textures, perspective cameras and KHR_lights_punctual.
+//! (POSITION, NORMAL, TANGENT, TEXCOORD_0/1, COLOR_0, indices; strips and fans converted),
+//! EXT_mesh_gpu_instancing, metallic–roughness materials with KHR_materials_emissive_strength,
+//! KHR_materials_specular and KHR_materials_diffuse_transmission, textures with
+//! KHR_texture_transform, perspective cameras (a node's scale scales znear and zfar) and
+//! KHR_lights_punctual.
 //!
 //! lightlab additions live in `extras` so other tools ignore them harmlessly:
 //! - a directional light's `extras.angularDiameter` (radians);
@@ -29,9 +31,14 @@ use std::path::{Path, PathBuf};
 /// The extensions lightlab reads; files that *require* any other are rejected.
 /// The deepest node hierarchy lightlab loads (real files nest a few dozen levels).
 pub const MAX_NODE_DEPTH: usize = 1024;
+/// The most triangles a scene may draw, instances counted (the GPU flattens instances, so this
+/// bounds its vertex buffers: about 10 GB).
+pub const MAX_TRIANGLES: u64 = 100_000_000;
 
-pub const SUPPORTED_EXTENSIONS: [&str; 4] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 6] = [
     "KHR_lights_punctual",
+    "KHR_texture_transform",
+    "EXT_mesh_gpu_instancing",
     "KHR_materials_emissive_strength",
     "KHR_materials_specular",
     "KHR_materials_diffuse_transmission",
@@ -77,6 +84,7 @@ pub fn import_slice(path: &Path, bytes: &[u8], opts: LoadOptions) -> Result<Scen
         mesh_map: HashMap::new(),
         tex_map: HashMap::new(),
         skipped: 0,
+        instanced_triangles: 0,
     }
     .run()?;
     scene.name = path
@@ -220,12 +228,51 @@ struct Importer<'a> {
     tex_map: HashMap<(usize, bool), usize>,
     /// Primitives skipped (points, lines).
     skipped: usize,
+    /// Triangles of the instances so far.
+    instanced_triangles: u64,
 }
 
 fn extras_json(extras: &gltf::json::Extras) -> Option<Value> {
     extras
         .as_ref()
         .and_then(|raw| serde_json::from_str(raw.get()).ok())
+}
+
+/// A texture reference's UV set and KHR_texture_transform (`value` is the extension's
+/// object; None = untransformed): its `texCoord` overrides the reference's.
+fn uv_transform(value: Option<&Value>, tex_coord: u32) -> Result<(u32, UvTransform), String> {
+    let Some(v) = value else {
+        return Ok((tex_coord, UvTransform::IDENTITY));
+    };
+    let floats = |key: &str, default: [f32; 2]| -> Result<[f32; 2], String> {
+        match v.get(key) {
+            None => Ok(default),
+            Some(Value::Array(a)) if a.len() == 2 => {
+                let f = |x: &Value| x.as_f64().map(|x| x as f32).filter(|x| x.is_finite());
+                match (f(&a[0]), f(&a[1])) {
+                    (Some(x), Some(y)) => Ok([x, y]),
+                    _ => Err(format!("{key} is not two finite numbers")),
+                }
+            }
+            Some(_) => Err(format!("{key} is not two numbers")),
+        }
+    };
+    let offset = floats("offset", [0.0, 0.0])?;
+    let scale = floats("scale", [1.0, 1.0])?;
+    let rotation = match v.get("rotation") {
+        None => 0.0,
+        Some(r) => r
+            .as_f64()
+            .map(|r| r as f32)
+            .filter(|r| r.is_finite())
+            .ok_or("rotation is not a finite number")?,
+    };
+    let set = match v.get("texCoord") {
+        None => tex_coord,
+        Some(t) => t.as_u64().ok_or("texCoord is not a whole number")? as u32,
+    };
+    let t = UvTransform::new(Vec2::from(offset), rotation, Vec2::from(scale));
+    Ok((set, t))
 }
 
 impl Importer<'_> {
@@ -333,12 +380,7 @@ impl Importer<'_> {
     /// One warning per feature of the file that lightlab does not render yet, so that nothing
     /// is dropped in silence.
     fn ignored_features(&mut self) {
-        const EXTENSIONS: [(&str, &str); 5] = [
-            ("KHR_texture_transform", "texture transforms are ignored"),
-            (
-                "EXT_mesh_gpu_instancing",
-                "GPU instances are ignored (each node draws once)",
-            ),
+        const EXTENSIONS: [(&str, &str); 3] = [
             (
                 "KHR_materials_transmission",
                 "transmission is ignored (surfaces are opaque)",
@@ -357,11 +399,6 @@ impl Importer<'_> {
                 .meshes()
                 .flat_map(|m| m.primitives().collect::<Vec<_>>())
         };
-        if prims().any(|p| p.get(&gltf::Semantic::Colors(0)).is_some()) {
-            self.scene
-                .warnings
-                .push("vertex colours (COLOR_0) are ignored".into());
-        }
         if self.doc.skins().next().is_some() || prims().any(|p| p.morph_targets().next().is_some())
         {
             self.scene
@@ -429,24 +466,41 @@ impl Importer<'_> {
 
     fn material(&mut self, m: &gltf::Material) -> Result<Material, SceneError> {
         let pbr = m.pbr_metallic_roughness();
-        let mut tref = |info: Option<gltf::texture::Info>, srgb: bool| -> Result<_, SceneError> {
-            info.map(|i| {
-                Ok(TextureRef {
-                    texture: self.texture(i.texture(), srgb)?,
-                    uv_set: i.tex_coord(),
-                })
+        let (doc, path) = (self.doc, self.path);
+        let name = m.name().unwrap_or("material").to_string();
+        let mut tref = |tex: gltf::Texture,
+                        tex_coord: u32,
+                        transform: Option<&Value>,
+                        srgb: bool|
+         -> Result<TextureRef, SceneError> {
+            let (uv_set, transform) = uv_transform(transform, tex_coord).map_err(|e| {
+                gltf_err(
+                    self.path,
+                    format!("material '{name}': KHR_texture_transform {e}"),
+                )
+            })?;
+            Ok(TextureRef {
+                texture: self.texture(tex, srgb)?,
+                uv_set,
+                transform,
             })
-            .transpose()
         };
-        let base_color_texture = tref(pbr.base_color_texture(), true)?;
-        let metallic_roughness_texture = tref(pbr.metallic_roughness_texture(), false)?;
-        let emissive_texture = tref(m.emissive_texture(), true)?;
+        const TT: &str = "KHR_texture_transform";
+        let mut info = |i: Option<gltf::texture::Info>, srgb| {
+            i.map(|i| tref(i.texture(), i.tex_coord(), i.extension_value(TT), srgb))
+                .transpose()
+        };
+        let base_color_texture = info(pbr.base_color_texture(), true)?;
+        let metallic_roughness_texture = info(pbr.metallic_roughness_texture(), false)?;
+        let emissive_texture = info(m.emissive_texture(), true)?;
         let (normal_texture, normal_scale) = match m.normal_texture() {
             Some(n) => (
-                Some(TextureRef {
-                    texture: self.texture(n.texture(), false)?,
-                    uv_set: n.tex_coord(),
-                }),
+                Some(tref(
+                    n.texture(),
+                    n.tex_coord(),
+                    n.extension_value(TT),
+                    false,
+                )?),
                 n.scale(),
             ),
             None => (None, 1.0),
@@ -459,20 +513,19 @@ impl Importer<'_> {
             None => None,
             Some(info) => {
                 let index = info.get("index").and_then(|i| i.as_u64());
-                let tex = index.and_then(|i| self.doc.textures().nth(i as usize));
+                let tex = index.and_then(|i| doc.textures().nth(i as usize));
                 let Some(tex) = tex else {
                     return Err(gltf_err(
-                        self.path,
+                        path,
                         format!(
                             "material '{}': diffuseTransmissionTexture has no valid index",
                             m.name().unwrap_or("material")
                         ),
                     ));
                 };
-                Some(TextureRef {
-                    texture: self.texture(tex, false)?,
-                    uv_set: info.get("texCoord").and_then(|t| t.as_u64()).unwrap_or(0) as u32,
-                })
+                let tex_coord = info.get("texCoord").and_then(|t| t.as_u64()).unwrap_or(0);
+                let transform = info.get("extensions").and_then(|e| e.get(TT));
+                Some(tref(tex, tex_coord as u32, transform, false)?)
             }
         };
         let sway = extras_json(m.extras())
@@ -534,13 +587,18 @@ impl Importer<'_> {
             .map(String::from)
             .unwrap_or_else(|| format!("node{}", node.index()));
         if let Some(mesh) = node.mesh() {
+            // EXT_mesh_gpu_instancing: the mesh is drawn once per instance transform.
+            let copies = match self.gpu_instances(node)? {
+                Some(t) => t.into_iter().map(|t| world * t).collect(),
+                None => vec![world],
+            };
             for prim in mesh.primitives() {
                 let key = (mesh.index(), prim.index());
                 let id = match self.mesh_map.get(&key) {
                     Some(&id) => id,
                     None => {
                         let Some(m) = self.primitive(&mesh, &prim, default_material)? else {
-                            self.skipped += 1;
+                            self.skipped += copies.len();
                             continue;
                         };
                         self.scene.meshes.push(m);
@@ -549,24 +607,47 @@ impl Importer<'_> {
                         id
                     }
                 };
-                self.scene.instances.push(Instance {
-                    name: node_name.clone(),
-                    mesh: id,
-                    transform: world,
-                });
+                self.instanced_triangles +=
+                    self.scene.meshes[id].triangle_count() as u64 * copies.len() as u64;
+                if self.instanced_triangles > MAX_TRIANGLES {
+                    return Err(SceneError::Content {
+                        path: self.path.into(),
+                        what: format!("node {} ('{node_name}')", node.index()),
+                        problem: format!(
+                            "brings the scene's instanced triangles past {MAX_TRIANGLES}, more \
+                             than lightlab renders"
+                        ),
+                    });
+                }
+                for (k, &transform) in copies.iter().enumerate() {
+                    self.scene.instances.push(Instance {
+                        name: match copies.len() {
+                            1 => node_name.clone(),
+                            _ => format!("{node_name}#{k}"),
+                        },
+                        mesh: id,
+                        transform,
+                    });
+                }
             }
         }
-        // Cameras and lights use the node's rigid part (scale removed).
-        let (_, rot, pos) = world.to_scale_rotation_translation();
+        // Cameras and lights use the node's rigid part. A camera node's scale scales its clip
+        // distances, as inverting the full node transform does in engines (three.js, Bevy):
+        // znear and zfar are lengths in the node's space.
+        let (scale, rot, pos) = world.to_scale_rotation_translation();
         let rigid = Mat4::from_rotation_translation(rot.normalize(), pos);
+        let clip_scale = Some(scale.x * scale.y * scale.z)
+            .map(|v| v.abs().cbrt())
+            .filter(|s| s.is_finite() && *s > 0.0)
+            .unwrap_or(1.0);
         if let Some(cam) = node.camera() {
             match cam.projection() {
                 gltf::camera::Projection::Perspective(p) => self.scene.cameras.push(Camera {
                     name: cam.name().map(String::from).unwrap_or(node_name.clone()),
                     transform: rigid,
                     yfov: p.yfov(),
-                    znear: p.znear(),
-                    zfar: p.zfar(),
+                    znear: p.znear() * clip_scale,
+                    zfar: p.zfar().map(|f| f * clip_scale),
                 }),
                 gltf::camera::Projection::Orthographic(_) => {
                     // Orthographic cameras are not used by any lightlab technique; skipped.
@@ -603,6 +684,67 @@ impl Importer<'_> {
             });
         }
         Ok(world)
+    }
+
+    /// The node's EXT_mesh_gpu_instancing transforms (TRANSLATION, ROTATION, SCALE accessors;
+    /// rotations as floats or normalised bytes or shorts); None without the extension.
+    fn gpu_instances(&self, node: &gltf::Node) -> Result<Option<Vec<Mat4>>, SceneError> {
+        let Some(ext) = node.extension_value("EXT_mesh_gpu_instancing") else {
+            return Ok(None);
+        };
+        let bad = |problem: String| SceneError::Content {
+            path: self.path.into(),
+            what: format!("node {} EXT_mesh_gpu_instancing", node.index()),
+            problem,
+        };
+        let attributes = ext
+            .get("attributes")
+            .and_then(Value::as_object)
+            .ok_or_else(|| bad("has no attributes".into()))?;
+        let read = |name: &str, dims: usize| -> Result<Option<Vec<Vec4>>, SceneError> {
+            let Some(index) = attributes.get(name) else {
+                return Ok(None);
+            };
+            let accessor = index
+                .as_u64()
+                .and_then(|i| self.doc.accessors().nth(i as usize))
+                .ok_or_else(|| bad(format!("{name} names no accessor")))?;
+            let values = read_vectors(&accessor, dims, self.buffers)
+                .ok_or_else(|| bad(format!("{name} is not a readable VEC{dims} accessor")))?;
+            if values.iter().any(|v| !v.is_finite()) {
+                return Err(bad(format!("{name} has NaN or infinite values")));
+            }
+            Ok(Some(values))
+        };
+        let (t, r, s) = (
+            read("TRANSLATION", 3)?,
+            read("ROTATION", 4)?,
+            read("SCALE", 3)?,
+        );
+        let counts: Vec<usize> = [&t, &r, &s]
+            .iter()
+            .filter_map(|v| v.as_ref().map(Vec::len))
+            .collect();
+        let Some(&n) = counts.first() else {
+            return Err(bad("has none of TRANSLATION, ROTATION and SCALE".into()));
+        };
+        if counts.iter().any(|&c| c != n) {
+            return Err(bad("its attributes differ in count".into()));
+        }
+        let at =
+            |v: &Option<Vec<Vec4>>, i: usize, default: Vec4| v.as_ref().map_or(default, |v| v[i]);
+        Ok(Some(
+            (0..n)
+                .map(|i| {
+                    let q = Quat::from_vec4(at(&r, i, Vec4::W)).normalize();
+                    Mat4::from_scale_rotation_translation(
+                        at(&s, i, Vec4::ONE).truncate(),
+                        if q.is_finite() { q } else { Quat::IDENTITY },
+                        at(&t, i, Vec4::ZERO).truncate(),
+                    )
+                })
+                .collect(),
+        ))
     }
 
     /// Every node of the scene, depth first without recursion: a node reached twice (a cycle,
@@ -690,6 +832,10 @@ impl Importer<'_> {
         let uv1 = reader
             .read_tex_coords(1)
             .map(|t| t.into_f32().map(Vec2::from_array).collect());
+        let colors = reader
+            .read_colors(0)
+            .map(|c| c.into_rgba_f32().map(Vec4::from_array).collect())
+            .unwrap_or_default();
         let indices: Vec<u32> = match reader.read_indices() {
             Some(i) => i.into_u32().collect(),
             None => (0..positions.len() as u32).collect(),
@@ -702,10 +848,54 @@ impl Importer<'_> {
             tangents,
             uv0,
             uv1,
+            colors,
             indices,
             material: prim.material().index().unwrap_or(default_material),
             detail_source: None,
         }))
+    }
+}
+
+/// An accessor of `dims` (3 or 4) components as vectors (w = 0 for three): floats, or
+/// normalised signed bytes or shorts (as EXT_mesh_gpu_instancing allows for rotations). None
+/// for any other type or an unreadable buffer.
+fn read_vectors(
+    accessor: &gltf::Accessor,
+    dims: usize,
+    buffers: &[gltf::buffer::Data],
+) -> Option<Vec<Vec4>> {
+    use gltf::accessor::{DataType, Dimensions, Iter};
+    let want = match dims {
+        3 => Dimensions::Vec3,
+        _ => Dimensions::Vec4,
+    };
+    if accessor.dimensions() != want {
+        return None;
+    }
+    let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
+    let norm = accessor.normalized();
+    match (accessor.data_type(), dims) {
+        (DataType::F32, 3) => Some(
+            Iter::<[f32; 3]>::new(accessor.clone(), get)?
+                .map(|v| Vec3::from_array(v).extend(0.0))
+                .collect(),
+        ),
+        (DataType::F32, _) => Some(
+            Iter::<[f32; 4]>::new(accessor.clone(), get)?
+                .map(Vec4::from_array)
+                .collect(),
+        ),
+        (DataType::I16, 4) if norm => Some(
+            Iter::<[i16; 4]>::new(accessor.clone(), get)?
+                .map(|v| Vec4::from_array(v.map(|x| (x as f32 / 32767.0).max(-1.0))))
+                .collect(),
+        ),
+        (DataType::I8, 4) if norm => Some(
+            Iter::<[i8; 4]>::new(accessor.clone(), get)?
+                .map(|v| Vec4::from_array(v.map(|x| (x as f32 / 127.0).max(-1.0))))
+                .collect(),
+        ),
+        _ => None,
     }
 }
 
@@ -943,7 +1133,24 @@ impl Writer {
         let textures: Vec<Value> = (0..images.len())
             .map(|i| json!({ "source": i, "sampler": usize::from(i >= scene.textures.len()) }))
             .collect();
-        let tinfo = |r: &TextureRef| json!({ "index": r.texture, "texCoord": r.uv_set });
+        let tinfo = |r: &TextureRef| {
+            let mut v = json!({ "index": r.texture, "texCoord": r.uv_set });
+            if !r.transform.is_identity() {
+                let (offset, rotation, scale) = r.transform.decompose();
+                v["extensions"] = json!({ "KHR_texture_transform": {
+                    "offset": offset.to_array(), "rotation": rotation, "scale": scale.to_array()
+                }});
+            }
+            v
+        };
+        if scene
+            .materials
+            .iter()
+            .flat_map(|m| m.texture_refs())
+            .any(|r| !r.transform.is_identity())
+        {
+            use_ext("KHR_texture_transform", &mut used);
+        }
         let mut materials = vec![];
         for m in &scene.materials {
             let mut pbr = json!({
@@ -970,8 +1177,8 @@ impl Writer {
                 v["emissiveTexture"] = tinfo(r);
             }
             if let Some(r) = &m.normal_texture {
-                v["normalTexture"] =
-                    json!({ "index": r.texture, "texCoord": r.uv_set, "scale": m.normal_scale });
+                v["normalTexture"] = tinfo(r);
+                v["normalTexture"]["scale"] = json!(m.normal_scale);
             }
             match m.alpha_mode {
                 AlphaMode::Opaque => {}
@@ -1049,6 +1256,10 @@ impl Writer {
                     "TEXCOORD_1".into(),
                     json!(self.floats(&uvs(uv1), 2, "VEC2", false)),
                 );
+            }
+            if !m.colors.is_empty() {
+                let c: Vec<f32> = m.colors.iter().flat_map(|c| c.to_array()).collect();
+                attrs.insert("COLOR_0".into(), json!(self.floats(&c, 4, "VEC4", false)));
             }
             let idx: Vec<u8> = m.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
             let view = self.view(&idx, Some(34963));

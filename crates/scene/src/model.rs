@@ -36,6 +36,9 @@ pub struct Mesh {
     pub uv0: Vec<Vec2>,
     /// Light-map UVs (TEXCOORD_1), when present.
     pub uv1: Option<Vec<Vec2>>,
+    /// Vertex colours (COLOR_0, linear RGBA); empty when the mesh has none. They multiply the
+    /// base colour, alpha included, as glTF defines.
+    pub colors: Vec<Vec4>,
     pub indices: Vec<u32>,
     pub material: usize,
     /// The high-poly mesh (index in the scene's meshes) this one was decimated from: bakers
@@ -45,34 +48,29 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// Both UV sets at barycentric weights `bw` of the triangle `idx` (zeros where the mesh
-    /// has no UV0).
-    pub fn uv_at(&self, idx: [usize; 3], bw: [f32; 3]) -> Uv {
-        let lerp = |uv: &[Vec2]| {
-            if uv.len() == self.positions.len() {
-                uv[idx[0]] * bw[0] + uv[idx[1]] * bw[1] + uv[idx[2]] * bw[2]
-            } else {
-                Vec2::ZERO
-            }
-        };
-        let uv0 = lerp(&self.uv0);
-        let uv1 = self.uv1.as_deref().map_or(uv0, lerp);
-        Uv([uv0, uv1])
+    /// Both UV sets and the vertex colour at barycentric weights `bw` of the triangle `idx`
+    /// (zeros where the mesh has no UV0, white where it has no colours).
+    pub fn uv_at(&self, idx: [usize; 3], bw: [f32; 3]) -> Attrs {
+        Attrs::weighted(&idx.map(|i| self.attrs_of(i)), bw)
     }
 
-    /// The UVs of triangle `t`'s corners in set `set` (zeros where the mesh has none).
-    pub fn corner_uvs(&self, t: &[u32], set: u32) -> [Vec2; 3] {
-        let uv = match (set, &self.uv1) {
-            (1, Some(uv1)) => uv1,
-            _ => &self.uv0,
-        };
-        [t[0], t[1], t[2]].map(|i| uv.get(i as usize).copied().unwrap_or_default())
+    /// The attributes of vertex `i`.
+    pub fn attrs_of(&self, i: usize) -> Attrs {
+        let uv0 = self.uv0.get(i).copied().unwrap_or_default();
+        let uv1 = self
+            .uv1
+            .as_ref()
+            .map_or(Some(uv0), |u| u.get(i).copied())
+            .unwrap_or_default();
+        Attrs {
+            uv: [uv0, uv1],
+            color: self.colors.get(i).copied().unwrap_or(Vec4::ONE),
+        }
     }
 
-    /// Both UV sets of triangle `t`'s corners.
-    pub fn corners(&self, t: &[u32]) -> [Uv; 3] {
-        let (a, b) = (self.corner_uvs(t, 0), self.corner_uvs(t, 1));
-        [0, 1, 2].map(|k| Uv([a[k], b[k]]))
+    /// The attributes of triangle `t`'s corners.
+    pub fn corners(&self, t: &[u32]) -> [Attrs; 3] {
+        [t[0], t[1], t[2]].map(|i| self.attrs_of(i as usize))
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -166,30 +164,111 @@ pub enum AlphaMode {
     Blend,
 }
 
-/// The texture coordinates of a surface point in both sets, TEXCOORD_0 and TEXCOORD_1 (the
-/// second repeats the first where a mesh has none). Every texture read picks its set through
+/// The interpolated vertex attributes of a surface point: the texture coordinates in both
+/// sets, TEXCOORD_0 and TEXCOORD_1 (the second repeats the first where a mesh has none), and
+/// the vertex colour (white where a mesh has none). Every texture read picks its set through
 /// [`Scene::sample`], so the path tracer, the bakers and the GPU read the same texels.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Uv(pub [Vec2; 2]);
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attrs {
+    pub uv: [Vec2; 2],
+    pub color: Vec4,
+}
 
-impl Uv {
-    /// The coordinates of set `set` (0 or 1).
-    pub fn set(&self, set: u32) -> Vec2 {
-        self.0[set.min(1) as usize]
-    }
-
-    /// The barycentric combination of three corners' coordinates.
-    pub fn weighted(c: &[Uv; 3], bw: [f32; 3]) -> Uv {
-        Uv([0, 1].map(|k| c[0].0[k] * bw[0] + c[1].0[k] * bw[1] + c[2].0[k] * bw[2]))
+impl Default for Attrs {
+    fn default() -> Self {
+        Attrs {
+            uv: [Vec2::ZERO; 2],
+            color: Vec4::ONE,
+        }
     }
 }
 
-/// A reference to a texture with the UV set it uses.
+impl Attrs {
+    /// The coordinates of set `set` (0 or 1).
+    pub fn set(&self, set: u32) -> Vec2 {
+        self.uv[set.min(1) as usize]
+    }
+
+    /// The barycentric combination of three corners' attributes.
+    pub fn weighted(c: &[Attrs; 3], bw: [f32; 3]) -> Attrs {
+        Attrs {
+            uv: [0, 1].map(|k| c[0].uv[k] * bw[0] + c[1].uv[k] * bw[1] + c[2].uv[k] * bw[2]),
+            color: c[0].color * bw[0] + c[1].color * bw[1] + c[2].color * bw[2],
+        }
+    }
+}
+
+/// A KHR_texture_transform: `uv' = offset + R(rotation) · (scale ∘ uv)`, the matrix T·R·S of
+/// the extension, where R turns the UVs counter-clockwise (the image clockwise). Stored as
+/// the rows of a 2×3 matrix.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform(pub [[f32; 3]; 2]);
+
+impl UvTransform {
+    pub const IDENTITY: UvTransform = UvTransform([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+
+    /// From the extension's offset, rotation (radians) and scale.
+    pub fn new(offset: Vec2, rotation: f32, scale: Vec2) -> UvTransform {
+        let (s, c) = rotation.sin_cos();
+        UvTransform([
+            [c * scale.x, s * scale.y, offset.x],
+            [-s * scale.x, c * scale.y, offset.y],
+        ])
+    }
+
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        let [a, b] = self.0;
+        Vec2::new(
+            a[0] * uv.x + a[1] * uv.y + a[2],
+            b[0] * uv.x + b[1] * uv.y + b[2],
+        )
+    }
+
+    pub fn is_identity(&self) -> bool {
+        *self == UvTransform::IDENTITY
+    }
+
+    /// The offset, rotation and scale that [`UvTransform::new`] turns into this matrix (a
+    /// negative x scale comes back as a half turn and a negative y scale).
+    pub fn decompose(&self) -> (Vec2, f32, Vec2) {
+        let [a, b] = self.0;
+        let sx = Vec2::new(a[0], b[0]).length();
+        let rotation = (-b[0]).atan2(a[0]);
+        let (s, c) = rotation.sin_cos();
+        let sy = a[1] * s + b[1] * c;
+        (Vec2::new(a[2], b[2]), rotation, Vec2::new(sx, sy))
+    }
+}
+
+impl Default for UvTransform {
+    fn default() -> Self {
+        UvTransform::IDENTITY
+    }
+}
+
+/// A reference to a texture with the UV set it uses and the transform applied to its UVs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureRef {
     pub texture: usize,
     /// 0 = TEXCOORD_0, 1 = TEXCOORD_1.
     pub uv_set: u32,
+    pub transform: UvTransform,
+}
+
+impl TextureRef {
+    /// Texture `texture` on UV set `uv_set`, untransformed.
+    pub fn new(texture: usize, uv_set: u32) -> TextureRef {
+        TextureRef {
+            texture,
+            uv_set,
+            transform: UvTransform::IDENTITY,
+        }
+    }
+
+    /// The texture's coordinates at a surface point.
+    pub fn uv(&self, a: &Attrs) -> Vec2 {
+        self.transform.apply(a.set(self.uv_set))
+    }
 }
 
 /// The reflection model a material is shaded with, by the path tracer and the GPU techniques
@@ -656,8 +735,8 @@ impl Scene {
     }
 
     /// Texture `r` at the surface point with coordinates `uv`, in the set `r` names.
-    pub fn sample(&self, r: TextureRef, uv: Uv) -> Vec4 {
-        self.textures[r.texture].sample(uv.set(r.uv_set))
+    pub fn sample(&self, r: TextureRef, a: Attrs) -> Vec4 {
+        self.textures[r.texture].sample(r.uv(&a))
     }
 
     /// Shade every material with `model` (the `--brdf` override of the command line).
@@ -774,6 +853,35 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn uv_transforms_follow_the_extension_matrix() {
+        // T·R·S with the rows (cos, sin; −sin, cos) of the sample implementations (the
+        // extension's GLSL, read column-major, has the other sign; its test model's markers
+        // follow the implementations).
+        let t = UvTransform::new(
+            Vec2::new(0.5, 0.25),
+            std::f32::consts::FRAC_PI_2,
+            Vec2::new(2.0, 1.0),
+        );
+        let q = t.apply(Vec2::new(1.0, 0.0));
+        assert!((q - Vec2::new(0.5, -1.75)).length() < 1e-6, "{q}");
+        let q = t.apply(Vec2::new(0.0, 1.0));
+        assert!((q - Vec2::new(1.5, 0.25)).length() < 1e-6, "{q}");
+        for (o, r, s) in [
+            (Vec2::new(0.1, -3.0), 0.7, Vec2::new(1.5, 0.2)),
+            (Vec2::ZERO, -2.9, Vec2::new(0.5, -4.0)),
+            (Vec2::new(9.0, 1.0), 3.1, Vec2::new(-1.0, 2.0)),
+        ] {
+            let t = UvTransform::new(o, r, s);
+            let (o2, r2, s2) = t.decompose();
+            let back = UvTransform::new(o2, r2, s2);
+            for (a, b) in t.0.iter().flatten().zip(back.0.iter().flatten()) {
+                assert!((a - b).abs() < 1e-5, "{t:?} {back:?}");
+            }
+        }
+        assert!(UvTransform::default().is_identity());
+    }
 
     #[test]
     fn equirect_round_trip_and_axes() {

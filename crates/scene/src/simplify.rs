@@ -172,6 +172,11 @@ pub fn simplify(
         tangents: vec![],
         uv0: pick2(&mesh.uv0),
         uv1: None,
+        colors: if mesh.colors.len() == mesh.positions.len() {
+            kept.iter().map(|&i| mesh.colors[i]).collect()
+        } else {
+            vec![]
+        },
         indices: new_indices,
         material: mesh.material,
         detail_source: Some(source),

@@ -144,6 +144,23 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
                 "TEXCOORD_1 is inconsistent or not finite".into(),
             ));
         }
+        if let Some(set) = scene.materials[mesh.material]
+            .texture_refs()
+            .map(|r| r.uv_set)
+            .find(|&s| s > 1)
+        {
+            return Err(geo(
+                &name,
+                format!(
+                    "a texture of its material reads TEXCOORD_{set}; lightlab reads sets 0 and 1"
+                ),
+            ));
+        }
+        if !mesh.colors.is_empty()
+            && (mesh.colors.len() != n || mesh.colors.iter().any(|c| !c.is_finite()))
+        {
+            return Err(geo(&name, "COLOR_0 is inconsistent or not finite".into()));
+        }
         if let Some(warning) = drop_degenerate(mesh, opts.strict).map_err(|e| geo(&name, e))? {
             scene.warnings.push(warning);
         }

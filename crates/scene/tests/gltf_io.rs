@@ -520,3 +520,135 @@ fn detail_sources_load_without_an_instance_and_bad_ones_are_named() {
     let msg = load_err(&p);
     assert!(msg.contains("detailSource"), "{msg}");
 }
+
+/// Little-endian bytes of floats.
+fn f32_bytes<const N: usize>(v: &[[f32; N]]) -> Vec<u8> {
+    v.iter().flatten().flat_map(|f| f.to_le_bytes()).collect()
+}
+
+/// `GOOD` under a node at (0, 0, 1) with EXT_mesh_gpu_instancing: translations (0,0,0),
+/// (5,0,0), (0,5,0); the second scaled by 2, the third turned 90° about z. `counts` are the
+/// accessor counts of TRANSLATION, ROTATION and SCALE (3 each for a good file).
+fn instanced_file(dir: &Path, name: &str, counts: [usize; 3]) -> std::path::PathBuf {
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    let t = f32_bytes(&[[0.0, 0.0, 0.0], [5.0, 0.0, 0.0], [0.0, 5.0, 0.0]]);
+    let r = f32_bytes(&[[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, h, h]]);
+    let s = f32_bytes(&[[1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [1.0, 1.0, 1.0]]);
+    let bin = [t, r, s].concat();
+    std::fs::write(dir.join(format!("{name}-inst.bin")), &bin).unwrap();
+    triangle_file(dir, name, GOOD, true, |j| {
+        j["extensionsUsed"] = serde_json::json!(["EXT_mesh_gpu_instancing"]);
+        j["nodes"][0]["translation"] = serde_json::json!([0.0, 0.0, 1.0]);
+        j["nodes"][0]["extensions"] = serde_json::json!({ "EXT_mesh_gpu_instancing": {
+            "attributes": { "TRANSLATION": 2, "ROTATION": 3, "SCALE": 4 } } });
+        let buffers = j["buffers"].as_array_mut().unwrap();
+        buffers.push(
+            serde_json::json!({ "uri": format!("{name}-inst.bin"), "byteLength": bin.len() }),
+        );
+        let views = j["bufferViews"].as_array_mut().unwrap();
+        for (offset, len) in [(0, 36), (36, 48), (84, 36)] {
+            views.push(serde_json::json!({ "buffer": 1, "byteOffset": offset, "byteLength": len }));
+        }
+        let accessors = j["accessors"].as_array_mut().unwrap();
+        for (k, (ty, count)) in [
+            ("VEC3", counts[0]),
+            ("VEC4", counts[1]),
+            ("VEC3", counts[2]),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            accessors.push(serde_json::json!({
+                "bufferView": 2 + k, "componentType": 5126, "count": count, "type": ty }));
+        }
+    })
+}
+
+#[test]
+fn gpu_instancing_draws_the_mesh_once_per_transform() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = instanced_file(dir.path(), "inst", [3, 3, 3]);
+    let s = load(p.to_str().unwrap(), LoadOptions::default()).unwrap();
+    assert_eq!(s.instances.len(), 3);
+    assert_eq!(s.meshes.len(), 1, "the instances share one mesh");
+    let tris = world_triangles(&s);
+    let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+    // Vertex (1, 0, 0) of each instance.
+    assert!(near(tris[0][1], Vec3::new(1.0, 0.0, 1.0)), "{:?}", tris[0]);
+    assert!(near(tris[1][1], Vec3::new(7.0, 0.0, 1.0)), "{:?}", tris[1]);
+    assert!(near(tris[2][1], Vec3::new(0.0, 6.0, 1.0)), "{:?}", tris[2]);
+    assert!(
+        s.warnings.iter().all(|w| !w.contains("instanc")),
+        "{:?}",
+        s.warnings
+    );
+    // Attributes of different counts are refused, naming the extension.
+    let bad = instanced_file(dir.path(), "bad", [3, 2, 3]);
+    let msg = load_err(&bad);
+    assert!(
+        msg.contains("EXT_mesh_gpu_instancing") && msg.contains("count"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn a_camera_node_scale_scales_its_clip_distances() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = triangle_file(dir.path(), "cam", GOOD, true, |j| {
+        j["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!({ "camera": 0, "translation": [0.0, 0.0, 3.0], "scale": [2.0, 2.0, 2.0] }));
+        j["scenes"][0]["nodes"] = serde_json::json!([0, 1]);
+        j["cameras"] = serde_json::json!([{ "type": "perspective",
+            "perspective": { "yfov": 0.8, "znear": 0.1, "zfar": 10.0 } }]);
+    });
+    let s = load(p.to_str().unwrap(), LoadOptions::default()).unwrap();
+    let cam = &s.cameras[0];
+    assert!((cam.znear - 0.2).abs() < 1e-6, "znear {}", cam.znear);
+    assert!((cam.zfar.unwrap() - 20.0).abs() < 1e-4);
+    // The view itself is rigid: the camera sits at the node's position, unscaled.
+    assert!((cam.position() - Vec3::new(0.0, 0.0, 3.0)).length() < 1e-6);
+    assert!((cam.transform.x_axis.length() - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn texture_transforms_and_vertex_colours_round_trip() {
+    use lightlab_scene::UvTransform;
+    let mut s = lightlab_scene::builtin::builtin("bush").unwrap();
+    let t = UvTransform::new(glam::Vec2::new(0.25, -0.5), -2.5, glam::Vec2::new(3.0, 0.5));
+    let m = s
+        .materials
+        .iter()
+        .position(|m| m.base_color_texture.is_some())
+        .unwrap();
+    s.materials[m]
+        .base_color_texture
+        .as_mut()
+        .unwrap()
+        .transform = t;
+    for mesh in &mut s.meshes {
+        mesh.colors = (0..mesh.positions.len())
+            .map(|i| glam::Vec4::new((i % 7) as f32 / 6.0, 0.5, 1.0, (i % 3) as f32 / 2.0))
+            .collect();
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("t.glb");
+    lightlab_scene::gltf_io::export(&s, &p).unwrap();
+    let b = load(p.to_str().unwrap(), LoadOptions::default()).unwrap();
+    let got = b.materials[m].base_color_texture.unwrap().transform;
+    for (x, y) in got.0.iter().flatten().zip(t.0.iter().flatten()) {
+        assert!((x - y).abs() < 1e-5, "{got:?} vs {t:?}");
+    }
+    for (x, y) in s.meshes.iter().zip(&b.meshes) {
+        assert_eq!(x.colors.len(), y.colors.len(), "{}", x.name);
+        for (p, q) in x.colors.iter().zip(&y.colors) {
+            assert!((*p - *q).abs().max_element() < 1e-6);
+        }
+    }
+    assert!(
+        b.warnings
+            .iter()
+            .all(|w| !w.contains("COLOR_0") && !w.contains("transform"))
+    );
+}

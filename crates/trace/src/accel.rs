@@ -34,7 +34,10 @@ pub struct Hit {
 }
 
 struct AlphaTri {
+    /// The corners' coordinates for the base colour texture (its transform applied).
     uv: [Vec2; 3],
+    /// The corners' vertex-colour alpha (COLOR_0; 1 without).
+    vertex_alpha: [f32; 3],
     texture: Option<u32>,
     base_alpha: f32,
     cutoff: f32,
@@ -160,10 +163,13 @@ impl Accel {
                     instance: ii as u32,
                     triangle: ti as u32,
                 });
-                // The corners' UVs in the set the base colour texture reads.
-                let set = mat.base_color_texture.map_or(0, |r| r.uv_set);
+                // The corners' UVs for the base colour texture (an affine transform commutes
+                // with the barycentric interpolation).
+                let corners = mesh.corners(t);
+                let r = mat.base_color_texture;
                 alpha_of.push(cutoff.map(|cutoff| AlphaTri {
-                    uv: mesh.corner_uvs(t, set),
+                    uv: corners.map(|c| r.map_or(Vec2::ZERO, |r| r.uv(&c))),
+                    vertex_alpha: corners.map(|c| c.color.w),
                     texture: mat.base_color_texture.map(|r| r.texture as u32),
                     base_alpha: mat.base_color.w,
                     cutoff,
@@ -243,8 +249,12 @@ impl Accel {
         }
         let a = &self.alpha[ai as usize];
         let b = self.tris[slot].compute_barycentric(ray);
-        let uv = a.uv[0] * (1.0 - b.x - b.y) + a.uv[1] * b.x + a.uv[2] * b.y;
+        let bw = [1.0 - b.x - b.y, b.x, b.y];
+        let uv = a.uv[0] * bw[0] + a.uv[1] * bw[1] + a.uv[2] * bw[2];
+        let vertex_alpha =
+            a.vertex_alpha[0] * bw[0] + a.vertex_alpha[1] * bw[1] + a.vertex_alpha[2] * bw[2];
         let alpha = a.base_alpha
+            * vertex_alpha
             * match a.texture {
                 Some(t) => self.textures[t as usize].sample(uv).w,
                 None => 1.0,
@@ -396,10 +406,7 @@ mod tests {
             srgb: true,
         };
         let mat = Material {
-            base_color_texture: Some(TextureRef {
-                texture: 0,
-                uv_set: 0,
-            }),
+            base_color_texture: Some(TextureRef::new(0, 0)),
             alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
             ..Default::default()
         };

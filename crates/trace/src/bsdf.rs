@@ -53,8 +53,9 @@ impl Bsdf {
     }
 
     /// The BSDF of `material` at texture coordinate `uv`, seen from local direction `wo`.
-    pub fn new(scene: &Scene, material: &Material, uv: lightlab_scene::Uv, wo_z: f32) -> Bsdf {
-        let mut base = material.base_color;
+    pub fn new(scene: &Scene, material: &Material, uv: lightlab_scene::Attrs, wo_z: f32) -> Bsdf {
+        // COLOR_0 multiplies the base colour (white without).
+        let mut base = material.base_color * uv.color;
         if let Some(r) = material.base_color_texture {
             base *= scene.sample(r, uv);
         }
@@ -220,7 +221,12 @@ mod tests {
     use lightlab_core::sampling::{Rng, uniform_sphere};
 
     fn bsdf(m: Material, wo_z: f32) -> Bsdf {
-        Bsdf::new(&Scene::default(), &m, lightlab_scene::Uv::default(), wo_z)
+        Bsdf::new(
+            &Scene::default(),
+            &m,
+            lightlab_scene::Attrs::default(),
+            wo_z,
+        )
     }
 
     #[test]

@@ -14,7 +14,7 @@ use std::f32::consts::PI;
 #[derive(Clone, Debug)]
 pub struct EmitTri {
     pub p: [Vec3; 3],
-    pub uv: [lightlab_scene::Uv; 3],
+    pub uv: [lightlab_scene::Attrs; 3],
     /// Unit normal of the authored (front) side.
     pub n: Vec3,
     pub area: f32,
@@ -45,7 +45,7 @@ pub struct LightSample {
 }
 
 /// Emitted radiance of a material at `uv` (emissive texture applied).
-pub fn emission(scene: &Scene, material: usize, uv: lightlab_scene::Uv) -> Vec3 {
+pub fn emission(scene: &Scene, material: usize, uv: lightlab_scene::Attrs) -> Vec3 {
     let m = &scene.materials[material];
     let mut e = m.emission();
     if let Some(r) = m.emissive_texture {
@@ -151,7 +151,7 @@ impl LightSet {
         if cos_l <= 0.0 && !e.double_sided {
             return None;
         }
-        let uv = lightlab_scene::Uv::weighted(&e.uv, [1.0 - b.x - b.y, b.x, b.y]);
+        let uv = lightlab_scene::Attrs::weighted(&e.uv, [1.0 - b.x - b.y, b.x, b.y]);
         let le = emission(scene, e.material, uv);
         let pdf = p_sel / e.area * dist2 / cos_l.abs().max(1e-8);
         Some(LightSample {

@@ -19,7 +19,7 @@ use crate::lights::{LightSet, emission, sample_punctual};
 use glam::{Mat3, Vec2, Vec3};
 use lightlab_core::image::Image;
 use lightlab_core::sampling::{Frame, Rng, power_heuristic};
-use lightlab_scene::{Camera, Scene, Uv};
+use lightlab_scene::{Attrs, Camera, Scene};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
@@ -107,7 +107,7 @@ pub struct Surface {
     /// Interpolated (and normal-mapped) shading normal, on the front side.
     pub ns: Vec3,
     /// Both texture-coordinate sets (each texture read picks its own).
-    pub uv: Uv,
+    pub uv: Attrs,
     pub material: usize,
 }
 
@@ -155,7 +155,7 @@ pub fn normal_mapped(
     mesh: &lightlab_scene::Mesh,
     idx: [usize; 3],
     bw: [f32; 3],
-    uv: Uv,
+    uv: Attrs,
     ns: Vec3,
     ng: Vec3,
 ) -> Vec3 {
@@ -291,7 +291,7 @@ impl<'a> PathTracer<'a> {
                     p,
                     ng,
                     ns,
-                    uv: Uv::default(),
+                    uv: Attrs::default(),
                     material: usize::MAX,
                 };
                 let wo_l = Vec3::Z;

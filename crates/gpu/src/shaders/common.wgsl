@@ -139,6 +139,9 @@ struct GpuMaterial {
     pad0: f32,
     pad1: f32,
     pad2: f32,
+    // KHR_texture_transform of texture i (bit order of `flags`): rows 2i and 2i + 1 of the
+    // 2×3 matrix, uv' = (dot(row0.xy, uv) + row0.z, dot(row1.xy, uv) + row1.z).
+    uv_transform: array<vec4<f32>, 12>,
 }
 
 // The wind displacement of a world-space vertex (lightlab_core::wind::Wind::sway): `a` =

@@ -75,6 +75,7 @@ struct RsmVertex {
     @location(1) normal: vec3<f32>,
     @location(2) uv0: vec2<f32>,
     @location(3) uv1: vec2<f32>,
+    @location(4) color: vec4<f32>,
 }
 
 @vertex
@@ -86,6 +87,7 @@ fn rsm_vs(v: VertexIn) -> RsmVertex {
     o.normal = v.normal;
     o.uv0 = v.uv0;
     o.uv1 = v.uv1;
+    o.color = v.color;
     return o;
 }
 
@@ -100,7 +102,7 @@ struct RsmTexel {
 
 @fragment
 fn rsm_fs(in: RsmVertex) -> RsmTexel {
-    let base = material_base(in.uv0, in.uv1);
+    let base = material_base(in.uv0, in.uv1, in.color);
     if material.alpha_cutoff >= 0.0 && base.a < material.alpha_cutoff {
         discard;
     }

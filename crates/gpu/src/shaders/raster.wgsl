@@ -36,6 +36,7 @@ struct VertexOut {
     // The ambient source's per-vertex term (per-vertex PRT: E/π shaded at the vertex,
     // Gouraud); zero for the others.
     @location(6) vertex_light: vec3<f32>,
+    @location(7) color: vec4<f32>,
 }
 
 @vertex
@@ -52,6 +53,7 @@ fn scene_vs(
     o.tangent = v.tangent;
     o.uv0 = v.uv0;
     o.uv1 = v.uv1;
+    o.color = v.color;
     o.instance = ii;
     o.vertex_light = source_vertex(v.position, vi, ii);
     return o;
@@ -62,7 +64,7 @@ fn uv_for(i: u32, in: VertexOut) -> vec2<f32> {
 }
 
 fn base_color(in: VertexOut) -> vec4<f32> {
-    return material_base(in.uv0, in.uv1);
+    return material_base(in.uv0, in.uv1, in.color);
 }
 
 fn alpha_test(in: VertexOut) {
@@ -463,6 +465,7 @@ struct ShadowOut {
     @location(0) world: vec3<f32>,
     @location(1) uv0: vec2<f32>,
     @location(2) uv1: vec2<f32>,
+    @location(3) alpha: f32,
 }
 
 @vertex
@@ -473,15 +476,15 @@ fn shadow_vs(v: VertexIn) -> ShadowOut {
     o.world = p;
     o.uv0 = v.uv0;
     o.uv1 = v.uv1;
+    o.alpha = v.color.a;
     return o;
 }
 
 fn shadow_alpha_test(in: ShadowOut) {
     if material.alpha_cutoff >= 0.0 {
-        var a = material.base_color.a;
+        var a = material.base_color.a * in.alpha;
         if (material.flags & 1u) != 0u {
-            let uv = select(in.uv0, in.uv1, (material.uv_sets & 1u) == 1u);
-            a *= textureSampleLevel(base_tex, tex_sampler, uv, 0.0).a;
+            a *= textureSampleLevel(base_tex, tex_sampler, material_uv(0u, in.uv0, in.uv1), 0.0).a;
         }
         if a < material.alpha_cutoff {
             discard;

@@ -19,6 +19,7 @@ pub fn quad(name: &str, p: [Vec3; 4], material: usize) -> Mesh {
         tangents: vec![],
         uv0: uv.to_vec(),
         uv1: None,
+        colors: vec![],
         indices: vec![0, 1, 2, 0, 2, 3],
         material,
         detail_source: None,

@@ -526,20 +526,14 @@ fn bush() -> Scene {
     let leaf = s.add_material(Material {
         name: "leaf".into(),
         base_color: Vec4::ONE,
-        base_color_texture: Some(TextureRef {
-            texture: 0,
-            uv_set: 0,
-        }),
+        base_color_texture: Some(TextureRef::new(0, 0)),
         roughness: 0.6,
         specular: 0.3,
         alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
         double_sided: true,
         transmission: 0.45,
         sway: 1.0,
-        transmission_texture: Some(TextureRef {
-            texture: 1,
-            uv_set: 0,
-        }),
+        transmission_texture: Some(TextureRef::new(1, 0)),
         ..Default::default()
     });
     s.add_mesh(
@@ -700,10 +694,7 @@ fn prt() -> Scene {
     let mut s = Scene::default();
     s.textures.push(dune_normal_map());
     let mut ground = Material::diffuse("plane", Vec3::splat(0.6));
-    ground.normal_texture = Some(TextureRef {
-        texture: 0,
-        uv_set: 0,
-    });
+    ground.normal_texture = Some(TextureRef::new(0, 0));
     let plane = s.add_material(ground);
     let body = s.add_material(Material::diffuse("knot", Vec3::new(0.75, 0.72, 0.68)));
     let mut ground_mesh = quad(

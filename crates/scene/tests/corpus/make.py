@@ -152,9 +152,10 @@ g = base()
 g["meshes"][0]["primitives"].append({"attributes": {"POSITION": 0}, "mode": 0})
 files["points_beside_triangles.gltf"] = g
 
-# Features lightlab does not render yet: loaded, with one warning each.
+# Features lightlab does not render yet (transmission): loaded, with one warning each; beside
+# features it renders (texture transforms, GPU instancing, vertex colours), without one.
 g = base()
-g["extensionsUsed"] += ["KHR_texture_transform", "EXT_mesh_gpu_instancing"]
+g["extensionsUsed"] += ["KHR_materials_transmission", "KHR_texture_transform", "EXT_mesh_gpu_instancing"]
 g["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = 1
 files["unsupported_features.gltf"] = g
 
