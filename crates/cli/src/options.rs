@@ -13,7 +13,9 @@ use lightlab_core::sh::Window;
 use lightlab_gpu::lights::Attenuation;
 use lightlab_gpu::lpv::{LpvScheme, LpvSettings};
 use lightlab_gpu::prt::ShFilter;
-use lightlab_gpu::raster::{Ambient, RasterSettings, RenderPath, ShadowMethod};
+use lightlab_gpu::raster::{
+    Ambient, EnvMapKind, EnvPrefilter, RasterSettings, RenderPath, ShadowMethod,
+};
 use lightlab_scene::{BrdfModel, Scene};
 use std::path::PathBuf;
 
@@ -229,6 +231,21 @@ pub struct RasterArgs {
     /// (their bakes hold that light).
     #[arg(long)]
     pub no_area_lights: bool,
+    /// The specular environment term's map (Heidrich ch. 8): dual-paraboloid (view-independent,
+    /// Heidrich's), cube, sphere (made for the camera's view) or none. Glossy and metallic
+    /// surfaces reflect the environment through it (`--ambient env`), or the constant sky
+    /// (`--ambient r,g,b`).
+    #[arg(long, default_value = "dual-paraboloid")]
+    pub env_map: EnvMapKind,
+    /// The lobe the environment map is prefiltered with: auto (GGX with the split-sum table
+    /// for PBR materials, Heidrich's Phong lobe for Phong and Blinn-Phong ones), phong or ggx
+    /// (for every material).
+    #[arg(long, default_value = "auto")]
+    pub env_prefilter: EnvPrefilter,
+    /// Texels of the environment map's finest level over all its faces (the same memory for
+    /// every parameterisation; each roughness level holds as many).
+    #[arg(long, default_value_t = 2 * 256 * 256)]
+    pub env_texels: u32,
 }
 
 impl Default for RasterArgs {
@@ -248,6 +265,9 @@ impl Default for RasterArgs {
             ssaa: 1,
             no_background: false,
             no_area_lights: false,
+            env_map: EnvMapKind::DualParaboloid,
+            env_prefilter: EnvPrefilter::Auto,
+            env_texels: 2 * 256 * 256,
         }
     }
 }
@@ -290,6 +310,9 @@ impl RasterArgs {
             wind,
             background: !self.no_background,
             area_lights: !self.no_area_lights,
+            env_map: self.env_map,
+            env_prefilter: self.env_prefilter,
+            env_texels: self.env_texels,
             ..Default::default()
         })
     }

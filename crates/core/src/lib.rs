@@ -17,6 +17,8 @@
 //! - [`lpv`]: light propagation volumes on the CPU (Kaplanyan's 6-face scheme with geometry
 //!   volume, and the WPI report's 18-neighbour scheme), the reference of the GPU passes;
 //! - [`wind`]: the wind sway of foliage shared by every pass and the CPU;
+//! - [`envmap`]: prefiltered environment maps (mirror, Phong and GGX lobes) and the GGX
+//!   split-sum table, for the GPU's specular environment term;
 //! - [`param`]: sphere parameterisations (lat-long, angular, sphere map, octahedral, dual
 //!   paraboloid, cube) with per-texel solid angles.
 //!
@@ -26,6 +28,7 @@
 pub mod atomic;
 pub mod brdf;
 pub mod color;
+pub mod envmap;
 pub mod fuzz;
 pub mod image;
 pub mod lpv;

@@ -486,9 +486,21 @@ impl Importer<'_> {
             })
         };
         const TT: &str = "KHR_texture_transform";
+        // The gltf crate parses the extension of a texture info itself (its feature is on so
+        // that files requiring it load); a normal texture's stays raw JSON.
         let mut info = |i: Option<gltf::texture::Info>, srgb| {
-            i.map(|i| tref(i.texture(), i.tex_coord(), i.extension_value(TT), srgb))
-                .transpose()
+            i.map(|i| {
+                let t = i.texture_transform().map(|t| {
+                    let mut v = json!({ "offset": t.offset(), "rotation": t.rotation(),
+                        "scale": t.scale() });
+                    if let Some(c) = t.tex_coord() {
+                        v["texCoord"] = json!(c);
+                    }
+                    v
+                });
+                tref(i.texture(), i.tex_coord(), t.as_ref(), srgb)
+            })
+            .transpose()
         };
         let base_color_texture = info(pbr.base_color_texture(), true)?;
         let metallic_roughness_texture = info(pbr.metallic_roughness_texture(), false)?;

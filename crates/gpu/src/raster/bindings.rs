@@ -102,13 +102,14 @@ impl GroupLayouts {
                 buffer(3, wgpu::BufferBindingType::Uniform, true),
             ],
         );
-        // Shadow maps (0–2), then the ambient source's bindings (3..).
+        // Shadow maps (0–2), the ambient source's bindings (3..), the environment term's (20–23).
         let mut entries = vec![
             texture(0, wgpu::TextureSampleType::Depth, Dim::D2Array),
             sampler(1, S::Comparison),
             texel_texture(2, Dim::D2Array),
         ];
         entries.extend_from_slice(source);
+        entries.extend(super::env::layout_entries());
         let lighting = layout(device, "lighting", &entries);
         let gbuffer = layout(
             device,

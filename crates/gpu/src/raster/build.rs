@@ -155,6 +155,7 @@ fn lighting_group(
     layout: &wgpu::BindGroupLayout,
     shadow: &ShadowArrays,
     ambient: &AmbientSource,
+    env: &super::env::EnvResources,
 ) -> wgpu::BindGroup {
     let cmp = device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some("shadow compare"),
@@ -169,6 +170,7 @@ fn lighting_group(
         entry(2, R::TextureView(&shadow.linear)),
     ];
     entries.extend(ambient.entries());
+    entries.extend(env.entries());
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lighting"),
         layout,
@@ -333,7 +335,10 @@ impl Renderer {
         );
         let targets = Targets::new(ctx, s);
         let (shadow, arrays) = ShadowMaps::new(ctx, s, ls.views.len(), linear_format);
-        let lighting = lighting_group(device, &layouts.lighting, &arrays, &source);
+        // The specular environment term, except on the debug and indirect-only views.
+        let env_on = !matches!(ambient, AmbientInput::Normals | AmbientInput::Lpv(_, true));
+        let env = super::env::EnvResources::new(ctx, scene, s, &camera, env_on);
+        let lighting = lighting_group(device, &layouts.lighting, &arrays, &source, &env);
         let g = groups(device, &layouts, &buffers, &targets, lighting);
         let sky_group = scene
             .environment
@@ -350,6 +355,7 @@ impl Renderer {
         let prepasses = source.prepass_count();
         let queries = queries(ctx, 5 + 2 * ls.lights.len() + ls.views.len() + prepasses);
         Ok(Renderer {
+            env_summary: env.summary.clone(),
             settings,
             scene: gscene,
             camera,

@@ -23,6 +23,7 @@
 mod ambient;
 mod bindings;
 mod build;
+pub mod env;
 mod light_set;
 mod passes;
 mod pipelines;
@@ -32,8 +33,8 @@ mod targets;
 
 pub use ambient::{LightmapInput, SourceKind};
 pub use settings::{
-    Ambient, BadAmbient, FrameTimes, MAX_AREA_LIGHTS, RasterError, RasterSettings, RenderPath,
-    ShadowMethod, projection,
+    Ambient, BadAmbient, EnvMapKind, EnvPrefilter, FrameTimes, MAX_AREA_LIGHTS, RasterError,
+    RasterSettings, RenderPath, ShadowMethod, projection,
 };
 
 use crate::GpuContext;
@@ -55,10 +56,11 @@ pub fn shader_source(kind: SourceKind) -> &'static str {
             .iter()
             .map(|k| {
                 format!(
-                    "{}\n{}\n{}\n{}",
+                    "{}\n{}\n{}\n{}\n{}",
                     crate::uniforms::COMMON_WGSL,
                     crate::uniforms::MATERIAL_WGSL,
                     include_str!("../shaders/raster.wgsl"),
+                    include_str!("../shaders/env.wgsl"),
                     k.wgsl()
                 )
             })
@@ -77,6 +79,8 @@ const SLOT: u64 = 256;
 /// A renderer for one scene at one resolution.
 pub struct Renderer {
     pub settings: RasterSettings,
+    /// The specular environment term's maps, for reports (None: off).
+    pub env_summary: Option<String>,
     pub scene: GpuScene,
     camera: Camera,
     lights: Vec<GpuLight>,

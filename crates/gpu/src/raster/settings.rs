@@ -46,6 +46,45 @@ impl ShadowMethod {
     }
 }
 
+/// The parameterisation of the prefiltered environment maps of the specular environment term
+/// (Heidrich 1999 ch. 8), or none.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvMapKind {
+    /// Two paraboloids, looked up from any viewpoint (§8.2.1).
+    DualParaboloid,
+    /// Six faces, each face chosen in the shader (no seamless filtering across edges).
+    Cube,
+    /// The OpenGL sphere map, made for the camera's viewing direction (view-dependent, §8.1).
+    Sphere,
+    /// No specular environment term.
+    None,
+}
+
+lightlab_core::named_enum!(EnvMapKind, "environment map", {
+    DualParaboloid => "dual-paraboloid",
+    Cube => "cube",
+    Sphere => "sphere",
+    None => "none",
+});
+
+/// The lobe the environment is prefiltered with, per material or forced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvPrefilter {
+    /// GGX with the split-sum table for PBR materials, the Phong lobe for Phong and
+    /// Blinn-Phong materials.
+    Auto,
+    /// Heidrich's Phong-lobe prefilter (§8.3.2) for every material.
+    Phong,
+    /// GGX with the split-sum table (Karis 2013) for every material.
+    Ggx,
+}
+
+lightlab_core::named_enum!(EnvPrefilter, "environment prefilter", {
+    Auto => "auto",
+    Phong => "phong",
+    Ggx => "ggx",
+});
+
 /// The constant or environment light of the ambient term (Fuchs's ambient uses the light-map;
 /// until light-maps exist it is this irradiance).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -124,6 +163,13 @@ pub struct RasterSettings {
     /// `with_lightmap` (a light-map already holds the emitters' light) or `with_sh` (lit by
     /// their SH light alone) ignore it.
     pub area_lights: bool,
+    /// The specular environment term's map (with `ambient` = the environment; a constant
+    /// ambient reflects as a constant environment).
+    pub env_map: EnvMapKind,
+    pub env_prefilter: EnvPrefilter,
+    /// Texels of the environment map's level 0 over all faces (equal memory across
+    /// parameterisations).
+    pub env_texels: u32,
 }
 
 impl Default for RasterSettings {
@@ -150,6 +196,9 @@ impl Default for RasterSettings {
             wind: Default::default(),
             background: true,
             area_lights: true,
+            env_map: EnvMapKind::DualParaboloid,
+            env_prefilter: EnvPrefilter::Auto,
+            env_texels: 2 * 256 * 256,
         }
     }
 }
@@ -176,6 +225,12 @@ impl RasterSettings {
         }
         if !(0..=4).contains(&s.pcf_radius) {
             return Err(RasterError::Settings("PCF radius must be 0 to 4".into()));
+        }
+        if !(64..=(1 << 24)).contains(&s.env_texels) {
+            return Err(RasterError::Settings(format!(
+                "environment map texels {} must be within 64..=16777216",
+                s.env_texels
+            )));
         }
         Ok(())
     }

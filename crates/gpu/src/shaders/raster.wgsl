@@ -137,9 +137,13 @@ fn emission(in: VertexOut) -> vec3<f32> {
 }
 
 // The radiance a fragment gets besides the per-light passes: the ambient source's term and
-// emission (`source_radiance`, defined by the ambient source compiled after this file).
+// emission (`source_radiance`, defined by the ambient source compiled after this file), and the
+// specular environment term (env.wgsl).
 fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
-    return source_radiance(s, in, nv);
+    let v = safe_normalize(frame.camera_pos - s.p, s.n);
+    let r = reflect(-v, s.n);
+    let dr = max(length(dpdx(r)), length(dpdy(r)));
+    return source_radiance(s, in, nv) + env_specular(s, v, r, dr);
 }
 
 // The environment's unshadowed SH irradiance (frame.ambient_sh) on the diffuse surface.

@@ -1,0 +1,354 @@
+//! The specular environment term (Heidrich 1999 ch. 8): the prefiltered maps of
+//! `lightlab_core::envmap` on the GPU (`shaders/env.wgsl`, group 2 bindings 20–23), in the
+//! parameterisation of `--env-map`, with the GGX split-sum table.
+//!
+//! Every lighting pass adds it to glossy and metallic surfaces (`base_radiance`), whatever the
+//! ambient source: an environment seen in a mirror is not shadowed by anything (no occlusion;
+//! the light-map and SH techniques keep their diffuse ambient and gain this term).
+
+use super::bindings::{buffer, entry, filtered_texture, sampler};
+use super::settings::{Ambient, EnvMapKind, EnvPrefilter, RasterSettings};
+use crate::GpuContext;
+use bytemuck::{Pod, Zeroable};
+use lightlab_core::envmap::{self, EnvMaps, EnvSettings, Lobe};
+use lightlab_core::param::Param;
+use lightlab_scene::{BrdfModel, Camera, Scene};
+use wgpu::BindGroupLayoutEntry as LayoutEntry;
+use wgpu::BindingResource as R;
+use wgpu::TextureViewDimension as Dim;
+use wgpu::util::DeviceExt;
+
+/// The most roughness levels a map holds (the uniform's array).
+pub const MAX_LEVELS: usize = 16;
+/// Side of the split-sum table.
+const LUT_SIZE: u32 = 32;
+
+/// WGSL `EnvUniforms`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct EnvUniforms {
+    /// World → map rotation, by rows.
+    pub row0: [f32; 4],
+    pub row1: [f32; 4],
+    pub row2: [f32; 4],
+    /// The constant environment's radiance (mode 4).
+    pub constant: [f32; 4],
+    /// The levels' roughness values, four per vector.
+    pub roughness: [[f32; 4]; 4],
+    /// 0 none, 1 dual paraboloid, 2 cube, 3 sphere map, 4 constant.
+    pub mode: u32,
+    pub levels: u32,
+    pub phong_set: u32,
+    pub ggx_set: u32,
+    /// 0 auto (by material model), 1 Phong, 2 GGX.
+    pub prefilter: u32,
+    pub faces: u32,
+    pub mips: f32,
+    pub texel_angle: f32,
+}
+
+/// Group 2's entries of the term.
+pub(super) fn layout_entries() -> Vec<LayoutEntry> {
+    vec![
+        filtered_texture(20, Dim::D2Array),
+        sampler(21, wgpu::SamplerBindingType::Filtering),
+        filtered_texture(22, Dim::D2),
+        buffer(23, wgpu::BufferBindingType::Uniform, false),
+    ]
+}
+
+/// The term's GPU resources.
+pub(super) struct EnvResources {
+    maps: wgpu::TextureView,
+    sampler: wgpu::Sampler,
+    lut: wgpu::TextureView,
+    uniforms: wgpu::Buffer,
+    /// What the term reflects, for reports: None when it is off.
+    pub summary: Option<String>,
+}
+
+/// Which lobes the scene's materials need under `prefilter`.
+fn lobes(scene: &Scene, prefilter: EnvPrefilter) -> Vec<Lobe> {
+    let glossy = |m: &&lightlab_scene::Material| {
+        m.brdf != BrdfModel::Lambert && (m.metallic > 0.0 || m.specular > 0.0)
+    };
+    let mats: Vec<_> = scene.materials.iter().filter(glossy).collect();
+    match prefilter {
+        EnvPrefilter::Phong => vec![Lobe::Phong],
+        EnvPrefilter::Ggx => vec![Lobe::Ggx],
+        EnvPrefilter::Auto => {
+            let mut l = vec![];
+            if mats.iter().any(|m| m.brdf == BrdfModel::Pbr) {
+                l.push(Lobe::Ggx);
+            }
+            if mats.iter().any(|m| m.brdf != BrdfModel::Pbr) {
+                l.push(Lobe::Phong);
+            }
+            l
+        }
+    }
+}
+
+/// The levels' roughness values: those the materials use (a Blinn-Phong material's Phong
+/// equivalent, a quarter of its exponent, too), and a ladder where a texture varies them.
+fn roughness_levels(scene: &Scene) -> Vec<f32> {
+    let mut used = vec![];
+    let mut ladder = false;
+    for m in &scene.materials {
+        used.push(m.roughness);
+        if m.brdf == BrdfModel::BlinnPhong {
+            let e = envmap::phong_exponent(m.roughness) / 4.0;
+            used.push(envmap::roughness_of_exponent(e));
+        }
+        ladder |= m.metallic_roughness_texture.is_some();
+    }
+    envmap::level_roughness(&used, ladder, MAX_LEVELS)
+}
+
+fn param_of(kind: EnvMapKind) -> Option<(Param, u32)> {
+    match kind {
+        EnvMapKind::DualParaboloid => Some((Param::DualParaboloid, 1)),
+        EnvMapKind::Cube => Some((Param::Cube, 2)),
+        EnvMapKind::Sphere => Some((Param::SphereMap, 3)),
+        EnvMapKind::None => None,
+    }
+}
+
+/// The prefiltered maps of the scene's environment for `s`, or None when the term is off or
+/// reflects a constant (no map needed).
+pub fn prefiltered(scene: &Scene, s: &RasterSettings, camera: &Camera) -> Option<EnvMaps> {
+    let (param, _) = param_of(s.env_map)?;
+    let env = scene.environment.as_ref()?;
+    if s.ambient != Ambient::Environment {
+        return None;
+    }
+    let lobes = lobes(scene, s.env_prefilter);
+    if lobes.is_empty() {
+        return None;
+    }
+    let frame = match param {
+        // Made for the camera's viewing direction: view space, viewer on +z.
+        Param::SphereMap => glam::Mat3::from_mat4(camera.transform).transpose(),
+        _ => envmap::WORLD_TO_MAP,
+    };
+    let settings = EnvSettings {
+        param,
+        frame,
+        size: EnvSettings::equal_memory_size(param, s.env_texels),
+        roughness: roughness_levels(scene),
+        lobes,
+        samples: 128,
+    };
+    Some(envmap::prefilter(&env.image, env.intensity, &settings))
+}
+
+impl EnvResources {
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        s: &RasterSettings,
+        camera: &Camera,
+        enabled: bool,
+    ) -> EnvResources {
+        let maps = if enabled {
+            prefiltered(scene, s, camera)
+        } else {
+            None
+        };
+        let mut u = EnvUniforms::zeroed();
+        if let Some(m) = &maps {
+            for (i, r) in m.roughness.iter().enumerate() {
+                u.roughness[i / 4][i % 4] = *r;
+            }
+            let rows = m.frame.transpose();
+            [u.row0, u.row1, u.row2] =
+                [rows.x_axis, rows.y_axis, rows.z_axis].map(|r| r.extend(0.0).to_array());
+            u.mode = param_of(s.env_map).map_or(0, |p| p.1);
+            u.levels = m.roughness.len() as u32;
+            u.phong_set = m.lobes.iter().position(|l| *l == Lobe::Phong).unwrap_or(0) as u32;
+            u.ggx_set = m.lobes.iter().position(|l| *l == Lobe::Ggx).unwrap_or(0) as u32;
+            u.faces = m.faces() as u32;
+            u.mips = m.layers[0].len() as f32;
+            u.texel_angle = m.texel_angle;
+        } else if let (true, Ambient::Constant(c), Some(_)) =
+            (enabled, s.ambient, param_of(s.env_map))
+        {
+            u.mode = 4;
+            u.constant = c.extend(1.0).to_array();
+        }
+        u.prefilter = match s.env_prefilter {
+            EnvPrefilter::Auto => 0,
+            EnvPrefilter::Phong => 1,
+            EnvPrefilter::Ggx => 2,
+        };
+        let device = &ctx.device;
+        let summary = match (&maps, u.mode) {
+            (Some(m), _) => Some(format!(
+                "{} environment map, {} face(s) of {}², roughness levels {:?}, lobes {:?}, {:.1} MB",
+                s.env_map,
+                m.faces(),
+                m.size,
+                m.roughness,
+                m.lobes,
+                m.bytes() as f64 / 1e6
+            )),
+            (None, 4) => Some("constant environment".into()),
+            _ => None,
+        };
+        let maps = upload_maps(ctx, maps.as_ref());
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("environment"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
+        });
+        let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("environment uniforms"),
+            contents: bytemuck::bytes_of(&u),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        EnvResources {
+            maps,
+            sampler,
+            lut: upload_lut(ctx),
+            uniforms,
+            summary,
+        }
+    }
+
+    pub fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
+        vec![
+            entry(20, R::TextureView(&self.maps)),
+            entry(21, R::Sampler(&self.sampler)),
+            entry(22, R::TextureView(&self.lut)),
+            entry(23, self.uniforms.as_entire_binding()),
+        ]
+    }
+}
+
+/// The maps as one mip-mapped RGBA16F array (a 1×1 pair of layers without maps). Radiance is
+/// clamped to 65,000, under the format's largest value.
+fn upload_maps(ctx: &GpuContext, maps: Option<&EnvMaps>) -> wgpu::TextureView {
+    let (size, layers, mips) = match maps {
+        Some(m) => (m.size, m.layers.len() as u32, m.layers[0].len() as u32),
+        None => (1, 2, 1),
+    };
+    // At least two layers: GL makes a one-layer texture a plain 2D texture.
+    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("environment maps"),
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: layers.max(2),
+        },
+        mip_level_count: mips,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba16Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    if let Some(m) = maps {
+        for (layer, chain) in m.layers.iter().enumerate() {
+            for (mip, texels) in chain.iter().enumerate() {
+                let n = (m.size >> mip).max(1);
+                let data: Vec<half::f16> = texels
+                    .iter()
+                    .flat_map(|c| {
+                        let c = c.clamp(glam::Vec3::ZERO, glam::Vec3::splat(65000.0));
+                        [c.x, c.y, c.z, 1.0].map(half::f16::from_f32)
+                    })
+                    .collect();
+                write_mip(
+                    ctx,
+                    &tex,
+                    layer as u32,
+                    mip as u32,
+                    n,
+                    bytemuck::cast_slice(&data),
+                );
+            }
+        }
+    }
+    tex.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(Dim::D2Array),
+        ..Default::default()
+    })
+}
+
+fn write_mip(ctx: &GpuContext, tex: &wgpu::Texture, layer: u32, mip: u32, n: u32, data: &[u8]) {
+    ctx.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: tex,
+            mip_level: mip,
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: 0,
+                z: layer,
+            },
+            aspect: wgpu::TextureAspect::All,
+        },
+        data,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(n * 8),
+            rows_per_image: Some(n),
+        },
+        wgpu::Extent3d {
+            width: n,
+            height: n,
+            depth_or_array_layers: 1,
+        },
+    );
+}
+
+/// The split-sum table (A, B in red and green), computed once per process.
+fn upload_lut(ctx: &GpuContext) -> wgpu::TextureView {
+    static LUT: std::sync::LazyLock<Vec<[f32; 2]>> =
+        std::sync::LazyLock::new(|| envmap::split_sum_lut(LUT_SIZE, 512));
+    let data: Vec<half::f16> = LUT
+        .iter()
+        .flat_map(|[a, b]| [*a, *b, 0.0, 1.0].map(half::f16::from_f32))
+        .collect();
+    let tex = crate::resources::texture(
+        &ctx.device,
+        "split-sum table",
+        LUT_SIZE,
+        LUT_SIZE,
+        1,
+        wgpu::TextureFormat::Rgba16Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
+    write_mip(ctx, &tex, 0, 0, LUT_SIZE, bytemuck::cast_slice(&data));
+    tex.create_view(&Default::default())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::check_struct;
+    use crate::rust_layout;
+
+    #[test]
+    fn env_uniforms_match_the_wgsl_layout() {
+        let src = crate::raster::shader_source(crate::raster::SourceKind::Sky);
+        let layout = rust_layout!(
+            EnvUniforms,
+            row0,
+            row1,
+            row2,
+            constant,
+            roughness,
+            mode,
+            levels,
+            phong_set,
+            ggx_set,
+            prefilter,
+            faces,
+            mips,
+            texel_angle
+        );
+        check_struct(src, "EnvUniforms", &layout).unwrap_or_else(|e| panic!("{e}"));
+    }
+}

@@ -1,0 +1,153 @@
+// The specular environment term (Heidrich 1999 ch. 8; raster/env.rs): prefiltered maps of the
+// environment in one parameterisation, a level per roughness, looked up around the reflected
+// direction. Compiled after raster.wgsl.
+
+struct EnvUniforms {
+    // World → map rotation, by rows.
+    row0: vec4<f32>,
+    row1: vec4<f32>,
+    row2: vec4<f32>,
+    // The constant environment's radiance (mode 4).
+    constant: vec4<f32>,
+    // The levels' roughness values, four per vector.
+    roughness: array<vec4<f32>, 4>,
+    // 0 none, 1 dual paraboloid, 2 cube, 3 sphere map, 4 constant.
+    mode: u32,
+    levels: u32,
+    phong_set: u32,
+    ggx_set: u32,
+    // 0 auto (GGX for PBR materials, Phong otherwise), 1 Phong, 2 GGX.
+    prefilter: u32,
+    faces: u32,
+    mips: f32,
+    texel_angle: f32,
+}
+
+@group(2) @binding(20) var env_maps: texture_2d_array<f32>;
+@group(2) @binding(21) var env_sampler: sampler;
+@group(2) @binding(22) var env_lut: texture_2d<f32>;
+@group(2) @binding(23) var<uniform> env_u: EnvUniforms;
+
+// (face, u, v) of map direction m, as lightlab_core::param::Param::dir_to_uv.
+fn env_face_uv(m: vec3<f32>) -> vec3<f32> {
+    if env_u.mode == 1u {
+        let q = m.xy / (1.0 + abs(m.z));
+        return vec3<f32>(select(1.0, 0.0, m.z >= 0.0), (q + 1.0) * 0.5);
+    }
+    if env_u.mode == 3u {
+        let k = 2.0 * sqrt(m.x * m.x + m.y * m.y + (m.z + 1.0) * (m.z + 1.0));
+        return vec3<f32>(0.0, m.xy / max(k, 1e-20) + 0.5);
+    }
+    let a = abs(m);
+    var f = 0.0;
+    var sc = 0.0;
+    var tc = 0.0;
+    var ma = 0.0;
+    if a.x >= a.y && a.x >= a.z {
+        ma = a.x;
+        tc = -m.y;
+        if m.x > 0.0 {
+            f = 0.0;
+            sc = -m.z;
+        } else {
+            f = 1.0;
+            sc = m.z;
+        }
+    } else if a.y >= a.z {
+        ma = a.y;
+        sc = m.x;
+        if m.y > 0.0 {
+            f = 2.0;
+            tc = m.z;
+        } else {
+            f = 3.0;
+            tc = -m.z;
+        }
+    } else {
+        ma = a.z;
+        tc = -m.y;
+        if m.z > 0.0 {
+            f = 4.0;
+            sc = m.x;
+        } else {
+            f = 5.0;
+            sc = -m.x;
+        }
+    }
+    return vec3<f32>(f, (vec2<f32>(sc, tc) / max(ma, 1e-20) + 1.0) * 0.5);
+}
+
+fn env_level_roughness(i: u32) -> f32 {
+    // Components picked by select: llvmpipe crashes on a dynamic component index.
+    let v = env_u.roughness[i / 4u];
+    let k = i % 4u;
+    return select(select(select(v.w, v.z, k == 2u), v.y, k == 1u), v.x, k == 0u);
+}
+
+// Level `level` of lobe set `lobe_set` around map direction m.
+fn env_read(lobe_set: u32, level: u32, m: vec3<f32>, lod: f32) -> vec3<f32> {
+    let fuv = env_face_uv(m);
+    let layer = (lobe_set * env_u.levels + level) * env_u.faces + u32(fuv.x);
+    return textureSampleLevel(env_maps, env_sampler, fuv.yz, layer, lod).rgb;
+}
+
+// The lobe-averaged radiance of set `lobe_set` at `roughness` around world direction d: the two
+// levels around it, interpolated (exact where a material's roughness has its own level).
+fn env_lobe(lobe_set: u32, roughness: f32, d: vec3<f32>, lod: f32) -> vec3<f32> {
+    if env_u.mode == 4u {
+        return env_u.constant.rgb;
+    }
+    let m = normalize(vec3<f32>(dot(env_u.row0.xyz, d), dot(env_u.row1.xyz, d), dot(env_u.row2.xyz, d)));
+    // The first level at or above `roughness` (the last when none is).
+    var hi = 0u;
+    for (var i = 1u; i < 16u; i++) {
+        if i < env_u.levels && env_level_roughness(i - 1u) < roughness {
+            hi = i;
+        }
+    }
+    let rh = env_level_roughness(hi);
+    if hi == 0u || rh <= roughness {
+        return env_read(lobe_set, hi, m, lod);
+    }
+    let rl = env_level_roughness(hi - 1u);
+    let t = clamp((roughness - rl) / max(rh - rl, 1e-6), 0.0, 1.0);
+    return mix(env_read(lobe_set, hi - 1u, m, lod), env_read(lobe_set, hi, m, lod), t);
+}
+
+// The environment reflected by the specular lobe of `s` towards v (unit, to the viewer): GGX
+// with the split-sum table, or Heidrich's Phong prefilter (f0·⟨n,r⟩·map). `dr` is the
+// reflected direction's change across a pixel (radians), which picks the minification level.
+// The uniform test stays apart from the per-fragment one: llvmpipe (Mesa 22.3, LLVM 15)
+// crashes compiling a branch whose condition mixes the two around these texture reads.
+fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32) -> vec3<f32> {
+    var out = vec3<f32>(0.0);
+    let nv = dot(s.n, v);
+    if env_u.mode != 0u {
+        let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (nv > 0.0);
+        if glossy {
+            out = env_glossy(s, nv, r, dr);
+        }
+    }
+    return out;
+}
+
+fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32) -> vec3<f32> {
+    let lod = clamp(log2(max(dr, 1e-8) / max(env_u.texel_angle, 1e-8)), 0.0, max(env_u.mips - 1.0, 0.0));
+    let ggx = (env_u.prefilter == 2u) | ((env_u.prefilter == 0u) & (s.model == 0u));
+    var out = vec3<f32>(0.0);
+    if ggx {
+        let l = env_lobe(env_u.ggx_set, s.roughness, r, lod);
+        let ab = textureSampleLevel(env_lut, env_sampler, vec2<f32>(nv, s.roughness), 0.0).rg;
+        out = l * (s.f0 * ab.x + ab.y);
+    } else {
+        var roughness = s.roughness;
+        if s.model == 3u {
+            // Blinn-Phong: the Phong lobe of a quarter of its exponent.
+            let e = phong_exponent(s.roughness) / 4.0;
+            roughness = pow(2.0 / (max(e, 1.0) + 2.0), 0.25);
+        }
+        let l = env_lobe(env_u.phong_set, roughness, r, lod);
+        out = s.f0 * l * max(dot(s.n, r), 0.0);
+    }
+    return out;
+}
