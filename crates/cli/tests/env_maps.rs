@@ -1,0 +1,134 @@
+//! The GPU's specular environment term against the path tracer: a lone sphere (convex, so
+//! nothing occludes or inter-reflects) lit by the `spheres` environment only, compared over the
+//! sphere's pixels.
+
+use glam::{Mat4, Vec2, Vec3, Vec4};
+use lightlab_core::image::Image;
+use lightlab_scene::{BrdfModel, Camera, Material, Scene};
+use std::path::Path;
+
+mod common;
+
+use common::{lightlab, ok};
+
+fn ball(roughness: f32, brdf: BrdfModel) -> Scene {
+    let mut s = Scene {
+        environment: lightlab_scene::builtin::builtin("spheres")
+            .unwrap()
+            .environment,
+        ..Default::default()
+    };
+    let mut m = Material::diffuse("metal", Vec3::ONE);
+    m.base_color = Vec4::new(0.95, 0.8, 0.55, 1.0);
+    m.metallic = 1.0;
+    m.roughness = roughness;
+    m.specular = 1.0;
+    m.brdf = brdf;
+    let mat = s.add_material(m);
+    s.add_mesh(
+        lightlab_scene::builtin::geom::sphere("ball", 1.0, 128, 64, mat),
+        Mat4::IDENTITY,
+    );
+    s.cameras.push(Camera::look_at(
+        "cam",
+        Vec3::new(0.0, 0.8, 3.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        0.75,
+    ));
+    s
+}
+
+/// relMSE of `a` against `b` over the pixels whose centre ray hits the unit sphere (shrunk by
+/// 3 % to keep the silhouette's partial pixels out).
+fn sphere_relmse(scene: &Scene, a: &Path, b: &Path) -> f64 {
+    let (a, b) = (Image::read(a).unwrap(), Image::read(b).unwrap());
+    let cam = &scene.cameras[0];
+    let (w, h) = (a.width, a.height);
+    let (mut s, mut n) = (0.0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let ndc = Vec2::new(
+                (x as f32 + 0.5) / w as f32 * 2.0 - 1.0,
+                1.0 - (y as f32 + 0.5) / h as f32 * 2.0,
+            );
+            let d = cam.ray_direction(ndc, w as f32 / h as f32);
+            let o = cam.position();
+            let t = -o.dot(d);
+            if (o + d * t).length() > 0.97 {
+                continue;
+            }
+            let i = (y * w + x) as usize;
+            for c in 0..3 {
+                let (p, q) = (a.data[i][c] as f64, b.data[i][c] as f64);
+                s += (p - q).powi(2) / (q * q + 0.01);
+            }
+            n += 3;
+        }
+    }
+    assert!(n > 1000, "the sphere covers {n} samples");
+    s / n as f64
+}
+
+fn render(glb: &Path, technique: &str, extra: &[&str], out: &Path) {
+    let mut args = vec![
+        "render",
+        "--scene",
+        glb.to_str().unwrap(),
+        "--technique",
+        technique,
+        "--width",
+        "96",
+    ];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["-o", out.to_str().unwrap()]);
+    ok(&lightlab(&args));
+}
+
+#[test]
+fn prefiltered_environment_reflections_match_the_path_tracer() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |n: &str| tmp.path().join(n);
+    // (roughness, model, allowed relMSE): mirror, GGX and Heidrich's Phong lobe (exponent 37).
+    let cases = [
+        (0.0, BrdfModel::Pbr, 0.002),
+        (0.3, BrdfModel::Pbr, 0.01),
+        (0.6, BrdfModel::Pbr, 0.01),
+        (0.4, BrdfModel::Phong, 0.005),
+    ];
+    for (r, brdf, limit) in cases {
+        let scene = ball(r, brdf);
+        let glb = p("ball.glb");
+        lightlab_scene::gltf_io::export(&scene, &glb).unwrap();
+        let reference = p("ref.exr");
+        render(&glb, "reference", &["--spp", "256"], &reference);
+        let mut errors = vec![];
+        for map in ["dual-paraboloid", "cube"] {
+            let gpu = p(&format!("{map}.exr"));
+            render(
+                &glb,
+                "phong-shadow-maps",
+                &["--env-map", map, "--ssaa", "2"],
+                &gpu,
+            );
+            errors.push(sphere_relmse(&scene, &gpu, &reference));
+        }
+        let none = p("none.exr");
+        render(&glb, "phong-shadow-maps", &["--env-map", "none"], &none);
+        let without = sphere_relmse(&scene, &none, &reference);
+        let agree = sphere_relmse(&scene, &p("cube.exr"), &p("dual-paraboloid.exr"));
+        eprintln!(
+            "{brdf:?} roughness {r}: relMSE dual paraboloid {:.4}, cube {:.4} (none {without:.3}); \
+             cube vs paraboloid {agree:.4}",
+            errors[0], errors[1]
+        );
+        for e in &errors {
+            assert!(*e <= limit, "{brdf:?} roughness {r}: relMSE {e} > {limit}");
+        }
+        assert!(
+            without > 10.0 * limit,
+            "the term changes nothing: {without}"
+        );
+        assert!(agree <= 0.002, "cube and paraboloid differ: {agree}");
+    }
+}
