@@ -5,6 +5,11 @@
 //! bounces from the primary hit points), on one thread and on all threads. The same ray sets
 //! can be handed to a peer (see `bench/embree_trace.py`) with `--dump-rays`.
 //!
+//! `bench env` is the equal-memory study of Heidrich's §8.1–8.2: the scene's environment
+//! held as a mirror map in each parameterisation at the same texel budgets, and the error of
+//! its reads against the source over evenly spread directions (by angle from the sphere map's
+//! viewer, and the worst 1 %), with the prefiltering time of a full set of levels.
+//!
 //! `bench bake` bakes the scene's light-maps with both bakers (radiosity and path-traced
 //! gathering) at the given settings and reports, for each, the wall time by stage, the texels,
 //! the rays cast (counted by the BVH) and rays per second, and the peak resident memory of the
@@ -60,6 +65,20 @@ pub enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Environment maps at equal memory: error against the source per parameterisation and
+    /// texel budget, and prefiltering time.
+    Env {
+        /// A built-in scene name or a .gltf/.glb path (its environment, or `--env`).
+        #[arg(long)]
+        scene: String,
+        /// Directions per measurement.
+        #[arg(long, default_value_t = 20_000)]
+        directions: u32,
+        #[command(flatten)]
+        load: LoadArgs,
+        #[arg(long)]
+        json: bool,
+    },
     /// Milliseconds per pass of a GPU technique (GPU timestamps where the adapter has them).
     Frame {
         #[arg(long)]
@@ -94,6 +113,12 @@ pub fn run(cmd: BenchCommand) -> Result<()> {
             load,
             json,
         } => bench_bake((&scene, &load), &bake, json),
+        BenchCommand::Env {
+            scene,
+            directions,
+            load,
+            json,
+        } => bench_env((&scene, &load), directions, json),
         BenchCommand::Frame {
             scene,
             technique,
@@ -372,6 +397,60 @@ pub struct FrameBenchArgs {
     /// are added, or the scene's list is cut.
     #[arg(long)]
     pub lights: Option<usize>,
+}
+
+fn bench_env(scene: (&str, &LoadArgs), directions: u32, json: bool) -> Result<()> {
+    use lightlab_core::envmap::{self, EnvSettings, Lobe};
+    use lightlab_core::param::Param;
+    let s = load_scene(scene.0, scene.1)?;
+    let env = s
+        .environment
+        .as_ref()
+        .context("the scene has no environment map: give one with --env FILE")?;
+    let params = [
+        ("dual-paraboloid", Param::DualParaboloid),
+        ("cube", Param::Cube),
+        ("sphere", Param::SphereMap),
+    ];
+    println!(
+        "environment {}×{}; relative squared error of mirror reads against the source, {directions} directions",
+        env.image.width, env.image.height
+    );
+    println!(
+        "{:<16} {:>9} {:>6} {:>10} {:>10} {:>10} {:>10} {:>10} {:>9}",
+        "map", "texels", "face", "0-90°", "90-150°", "150-180°", "all", "worst 1%", "filter s"
+    );
+    let mut rows = vec![];
+    for texels in [2 * 32 * 32, 2 * 64 * 64, 2 * 128 * 128, 2 * 256 * 256] {
+        for (name, param) in params {
+            let e = envmap::mirror_error(&env.image, param, texels, directions);
+            // A full set of levels (mirror + six roughness values, both lobes), timed.
+            let t0 = Instant::now();
+            let settings = EnvSettings {
+                param,
+                frame: envmap::WORLD_TO_MAP,
+                size: EnvSettings::equal_memory_size(param, texels),
+                roughness: vec![0.0, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8],
+                lobes: vec![Lobe::Ggx, Lobe::Phong],
+                samples: 128,
+                irradiance: true,
+            };
+            let maps = envmap::prefilter(&env.image, env.intensity, &settings);
+            let secs = t0.elapsed().as_secs_f64();
+            println!(
+                "{name:<16} {texels:>9} {:>6} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {:>10.2e} {secs:>9.2}",
+                maps.size, e.bands[0], e.bands[1], e.bands[2], e.all, e.worst_percent
+            );
+            rows.push(serde_json::json!({
+                "map": name, "texels": texels, "face": maps.size, "bands": e.bands,
+                "all": e.all, "worst_percent": e.worst_percent, "prefilter_s": secs,
+            }));
+        }
+    }
+    if json {
+        println!("{}", serde_json::json!({ "scene": s.name, "rows": rows }));
+    }
+    Ok(())
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

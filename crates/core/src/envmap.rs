@@ -76,6 +76,9 @@ pub struct EnvSettings {
     pub lobes: Vec<Lobe>,
     /// Lobe samples per texel.
     pub samples: u32,
+    /// Also an irradiance map (Heidrich Eq 8.13): the cosine-weighted mean radiance E/π
+    /// around each direction, stored after the lobe sets (`faces` layers).
+    pub irradiance: bool,
 }
 
 impl EnvSettings {
@@ -86,7 +89,7 @@ impl EnvSettings {
 }
 
 /// Prefiltered maps: `layers[(set · levels + level) · faces + face]` is a mip chain, `mips[m]`
-/// of side `size >> m`, row-major from the face's uv = (0, 0).
+/// of side `max(size >> m, 1)`, row-major from the face's uv = (0, 0).
 #[derive(Clone, Debug)]
 pub struct EnvMaps {
     pub param: Param,
@@ -95,6 +98,8 @@ pub struct EnvMaps {
     pub roughness: Vec<f32>,
     pub lobes: Vec<Lobe>,
     pub layers: Vec<Vec<Vec<Vec3>>>,
+    /// Whether the last `faces` layers are the irradiance map (E/π).
+    pub irradiance: bool,
     /// The mean angular size of a level-0 texel, sqrt(4π / texels) (radians): mip selection.
     pub texel_angle: f32,
 }
@@ -228,20 +233,34 @@ fn lobe_average(src: &Source, lobe: Lobe, roughness: f32, rw: Vec3, samples: u32
             }
         };
         let omega = 1.0 / (samples as f32 * pdf.max(1e-12));
-        // One level coarser than the sample's solid angle: smooth with few samples.
-        let lod = src.lod(omega) + 1.0;
+        // One level coarser than the sample's solid angle: smooth with few samples (with
+        // many, the extra blur would bias wide lobes across sharp edges such as a horizon).
+        let lod = src.lod(omega) + if samples >= 1024 { 0.0 } else { 1.0 };
         sum += src.sample(l, lod.min((src.levels.len() - 1) as f32)) * w;
         wsum += w;
     }
     if wsum > 0.0 { sum / wsum } else { Vec3::ZERO }
 }
 
-/// The face size at which a level's lobe is resolved (a texel under a third of its width).
-fn level_size(settings: &EnvSettings, lobe: Lobe, roughness: f32) -> u32 {
-    let width = match lobe {
+/// The angular width of a lobe (radians, about its standard deviation).
+fn lobe_width(lobe: Lobe, roughness: f32) -> f32 {
+    match lobe {
         Lobe::Phong => 1.0 / phong_exponent(roughness).sqrt(),
         Lobe::Ggx => 2.0 * roughness * roughness,
-    };
+    }
+}
+
+/// Samples a lobe needs: a lobe a few source texels wide is averaged well by few (each read
+/// is filtered), up to `max` for wide ones.
+fn lobe_samples(src: &Source, lobe: Lobe, roughness: f32, max: u32) -> u32 {
+    let texel = src.texel_solid_angle(0).sqrt();
+    let ratio = lobe_width(lobe, roughness) / texel;
+    ((16.0 * ratio * ratio).ceil() as u32).clamp(16.min(max), max)
+}
+
+/// The face size at which a level's lobe is resolved (a texel under a third of its width).
+fn level_size(settings: &EnvSettings, lobe: Lobe, roughness: f32) -> u32 {
+    let width = lobe_width(lobe, roughness);
     let per_face = (4.0 * PI / settings.param.faces() as f32).sqrt();
     let need = (3.0 * per_face / width.max(1e-6)).ceil() as u32;
     need.next_power_of_two()
@@ -298,6 +317,7 @@ fn upsample(data: &[Vec3], n: u32, m: u32) -> Vec<Vec3> {
 /// The minification chain of a face: 2×2 averages weighted by the texels' solid angles
 /// (§8.2.3); texels outside a disc weigh nothing unless all four are outside.
 fn mip_chain(param: Param, level0: Vec<Vec3>, size: u32) -> Vec<Vec<Vec3>> {
+    // Sizes halve as the GPU's do (⌊n/2⌋); an odd row or column is read twice.
     let mut mips = vec![level0];
     let mut n = size;
     while n > 1 {
@@ -308,7 +328,7 @@ fn mip_chain(param: Param, level0: Vec<Vec3>, size: u32) -> Vec<Vec<Vec3>> {
             for x in 0..m {
                 let (mut s, mut ws, mut plain) = (Vec3::ZERO, 0.0f64, Vec3::ZERO);
                 for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                    let (cx, cy) = (2 * x + dx, 2 * y + dy);
+                    let (cx, cy) = ((2 * x + dx).min(n - 1), (2 * y + dy).min(n - 1));
                     let v = prev[(cy * n + cx) as usize];
                     let w = param.texel_solid_angle(cx, cy, n, n);
                     s += v * w as f32;
@@ -328,7 +348,7 @@ fn mip_chain(param: Param, level0: Vec<Vec3>, size: u32) -> Vec<Vec<Vec3>> {
 pub fn prefilter(img: &Image, scale: f32, settings: &EnvSettings) -> EnvMaps {
     let src = Source::new(img, scale);
     let faces = settings.param.faces();
-    let size = settings.size.next_power_of_two();
+    let size = settings.size.max(1);
     let mut layers = vec![];
     for &lobe in &settings.lobes {
         for &r in &settings.roughness {
@@ -344,10 +364,33 @@ pub fn prefilter(img: &Image, scale: f32, settings: &EnvSettings) -> EnvMaps {
                     r,
                 )
             };
+            let level = EnvSettings {
+                samples: lobe_samples(&src, lobe, r, settings.samples),
+                ..settings.clone()
+            };
             for face in 0..faces {
-                let data = level_face(&src, settings, lobe, r, face, n);
+                let data = level_face(&src, &level, lobe, r, face, n);
                 layers.push(mip_chain(settings.param, upsample(&data, n, size), size));
             }
+        }
+    }
+    if settings.irradiance {
+        // The clamped cosine is the Phong lobe of exponent 1; its map is smooth: 32² a face.
+        let cosine = EnvSettings {
+            samples: 2048,
+            ..settings.clone()
+        };
+        let n = size.min(32);
+        for face in 0..faces {
+            let data = level_face(
+                &src,
+                &cosine,
+                Lobe::Phong,
+                roughness_of_exponent(1.0),
+                face,
+                n,
+            );
+            layers.push(mip_chain(settings.param, upsample(&data, n, size), size));
         }
     }
     EnvMaps {
@@ -356,6 +399,7 @@ pub fn prefilter(img: &Image, scale: f32, settings: &EnvSettings) -> EnvMaps {
         size,
         roughness: settings.roughness.clone(),
         lobes: settings.lobes.clone(),
+        irradiance: settings.irradiance,
         layers,
         texel_angle: (4.0 * PI / (faces as f32 * (size * size) as f32)).sqrt(),
     }
@@ -408,12 +452,75 @@ impl EnvMaps {
         a * (1.0 - t) + self.read(base(hi), m) * t
     }
 
+    /// The irradiance map's E/π around world direction `n` (None without one).
+    pub fn irradiance(&self, n: Vec3) -> Option<Vec3> {
+        self.irradiance.then(|| {
+            let base = self.layers.len() - self.faces();
+            self.read(base, self.frame * n.normalize())
+        })
+    }
+
     /// Bytes of the maps as RGBA16F with their mip chains.
     pub fn bytes(&self) -> usize {
         self.layers
             .iter()
             .map(|l| l.iter().map(|m| m.len() * 8).sum::<usize>())
             .sum()
+    }
+}
+
+/// How well a mirror map of `texels` texels in `param` holds `img`: the relative squared error
+/// of its reads against the source (bilinear at full resolution) over `n` directions spread
+/// evenly over the sphere (a mirror sphere's reflected directions, seen from any side, are
+/// spread evenly over its image), in bands of the angle from the map's +z axis (the sphere
+/// map's viewer): `[0°, 90°)`, `[90°, 150°)`, `[150°, 180°]`, and over all.
+pub struct MirrorError {
+    pub size: u32,
+    pub bands: [f64; 3],
+    pub all: f64,
+    /// The error of the worst 1 % of directions (relative to the mean squared radiance).
+    pub worst_percent: f64,
+}
+
+pub fn mirror_error(img: &Image, param: Param, texels: u32, n: u32) -> MirrorError {
+    let settings = EnvSettings {
+        param,
+        frame: WORLD_TO_MAP,
+        size: EnvSettings::equal_memory_size(param, texels),
+        roughness: vec![0.0],
+        lobes: vec![Lobe::Ggx],
+        samples: 1,
+        irradiance: false,
+    };
+    let maps = prefilter(img, 1.0, &settings);
+    let src = Source::new(img, 1.0);
+    let (mut err, mut norm) = ([0.0f64; 3], [0.0f64; 3]);
+    let mut each = Vec::with_capacity(n as usize);
+    for k in 0..n {
+        let d = crate::sampling::uniform_sphere(hammersley(k, n));
+        let want = src.bilinear(0, d);
+        let e = (maps.lookup(0, 0.0, d) - want).length_squared() as f64;
+        let z = (WORLD_TO_MAP * d).z;
+        let band = if z > 0.0 {
+            0
+        } else if z > -(150f32.to_radians().cos().abs()) {
+            1
+        } else {
+            2
+        };
+        err[band] += e;
+        norm[band] += want.length_squared() as f64;
+        each.push(e);
+    }
+    let mean_sq = norm.iter().sum::<f64>() / n as f64;
+    each.sort_by(f64::total_cmp);
+    let top = (n as usize / 100).max(1);
+    let worst = each[each.len() - top..].iter().sum::<f64>() / top as f64;
+    MirrorError {
+        size: maps.size,
+        bands: [0, 1, 2].map(|b| err[b] / norm[b].max(1e-30)),
+        all: err.iter().sum::<f64>() / norm.iter().sum::<f64>().max(1e-30),
+        worst_percent: worst / mean_sq.max(1e-30),
     }
 }
 
@@ -507,8 +614,11 @@ mod tests {
 
     /// Brute force: the lobe average by many stratified samples of the full-resolution source.
     fn brute(img: &Image, lobe: Lobe, roughness: f32, d: Vec3) -> Vec3 {
+        brute_n(img, lobe, roughness, d, 64)
+    }
+
+    fn brute_n(img: &Image, lobe: Lobe, roughness: f32, d: Vec3, n: u32) -> Vec3 {
         let src = Source::new(img, 1.0);
-        let n = 64u32;
         let (t, b) = crate::sampling::orthonormal_basis(d);
         let (mut s, mut ws) = (Vec3::ZERO, 0.0);
         for i in 0..n {
@@ -552,6 +662,7 @@ mod tests {
                 roughness: vec![0.0, 0.3, 0.6],
                 lobes: vec![Lobe::Ggx, Lobe::Phong],
                 samples: 256,
+                irradiance: false,
             };
             let maps = prefilter(&img, 1.0, &s);
             for (set, lobe) in s.lobes.iter().enumerate() {
@@ -585,6 +696,7 @@ mod tests {
                 roughness: vec![0.0],
                 lobes: vec![Lobe::Ggx],
                 samples: 1,
+                irradiance: false,
             };
             let maps = prefilter(&img, 1.0, &s);
             let (mut err, mut norm) = (0.0, 0.0);
@@ -601,6 +713,30 @@ mod tests {
             eprintln!("mirror {param:?}: {:.2e}", err / norm);
             assert!(err / norm < 1e-3, "{param:?}: {}", err / norm);
         }
+    }
+
+    #[test]
+    fn the_irradiance_map_matches_cosine_weighted_averages() {
+        let img = test_env(256);
+        let s = EnvSettings {
+            param: Param::DualParaboloid,
+            frame: WORLD_TO_MAP,
+            size: 64,
+            roughness: vec![0.0],
+            lobes: vec![Lobe::Ggx],
+            samples: 256,
+            irradiance: true,
+        };
+        let maps = prefilter(&img, 1.0, &s);
+        let (mut err, mut norm) = (0.0, 0.0);
+        for k in 0..64 {
+            let d = crate::sampling::uniform_sphere(hammersley(k, 64));
+            let want = brute_n(&img, Lobe::Phong, roughness_of_exponent(1.0), d, 256);
+            err += (maps.irradiance(d).unwrap() - want).length_squared();
+            norm += want.length_squared();
+        }
+        eprintln!("irradiance map: relative error {:.2e}", err / norm);
+        assert!(err / norm < 1e-3, "{}", err / norm);
     }
 
     #[test]
