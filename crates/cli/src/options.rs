@@ -14,7 +14,7 @@ use lightlab_gpu::lights::Attenuation;
 use lightlab_gpu::lpv::{LpvScheme, LpvSettings};
 use lightlab_gpu::prt::ShFilter;
 use lightlab_gpu::raster::{
-    Ambient, EnvMapKind, EnvPrefilter, RasterSettings, RenderPath, ShadowMethod,
+    Ambient, EnvDiffuse, EnvMapKind, EnvPrefilter, RasterSettings, RenderPath, ShadowMethod,
 };
 use lightlab_scene::{BrdfModel, Scene};
 use std::path::PathBuf;
@@ -242,6 +242,10 @@ pub struct RasterArgs {
     /// (for every material).
     #[arg(long, default_value = "auto")]
     pub env_prefilter: EnvPrefilter,
+    /// The diffuse environment light of the Phong techniques: sh (nine SH coefficients of
+    /// irradiance) or map (an irradiance map, Heidrich Eq 8.13).
+    #[arg(long, default_value = "sh")]
+    pub env_diffuse: EnvDiffuse,
     /// Texels of the environment map's finest level over all its faces (the same memory for
     /// every parameterisation; each roughness level holds as many).
     #[arg(long, default_value_t = 2 * 256 * 256)]
@@ -267,6 +271,7 @@ impl Default for RasterArgs {
             no_area_lights: false,
             env_map: EnvMapKind::DualParaboloid,
             env_prefilter: EnvPrefilter::Auto,
+            env_diffuse: EnvDiffuse::Sh,
             env_texels: 2 * 256 * 256,
         }
     }
@@ -312,6 +317,7 @@ impl RasterArgs {
             area_lights: !self.no_area_lights,
             env_map: self.env_map,
             env_prefilter: self.env_prefilter,
+            env_diffuse: self.env_diffuse,
             env_texels: self.env_texels,
             ..Default::default()
         })

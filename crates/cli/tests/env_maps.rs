@@ -132,3 +132,34 @@ fn prefiltered_environment_reflections_match_the_path_tracer() {
         assert!(agree <= 0.002, "cube and paraboloid differ: {agree}");
     }
 }
+
+#[test]
+fn the_irradiance_map_lights_diffuse_surfaces_like_the_path_tracer() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |n: &str| tmp.path().join(n);
+    let mut scene = ball(1.0, BrdfModel::Lambert);
+    scene.materials[0].metallic = 0.0;
+    scene.materials[0].base_color = Vec4::new(0.8, 0.8, 0.8, 1.0);
+    let glb = p("ball.glb");
+    lightlab_scene::gltf_io::export(&scene, &glb).unwrap();
+    let reference = p("ref.exr");
+    // Enough samples that the reference's noise (relMSE ~1e-3 at 256) does not hide the
+    // difference between the two.
+    render(&glb, "reference", &["--spp", "2048"], &reference);
+    let mut e = vec![];
+    for diffuse in ["map", "sh"] {
+        let gpu = p(&format!("{diffuse}.exr"));
+        render(
+            &glb,
+            "phong-shadow-maps",
+            &["--env-diffuse", diffuse, "--ssaa", "2"],
+            &gpu,
+        );
+        e.push(sphere_relmse(&scene, &gpu, &reference));
+    }
+    eprintln!(
+        "diffuse sphere: relMSE irradiance map {:.5}, 9 SH coefficients {:.5}",
+        e[0], e[1]
+    );
+    assert!(e[0] <= 0.002, "irradiance map: relMSE {}", e[0]);
+}

@@ -7,7 +7,7 @@
 //! the light-map and SH techniques keep their diffuse ambient and gain this term).
 
 use super::bindings::{buffer, entry, filtered_texture, sampler};
-use super::settings::{Ambient, EnvMapKind, EnvPrefilter, RasterSettings};
+use super::settings::{Ambient, EnvDiffuse, EnvMapKind, EnvPrefilter, RasterSettings};
 use crate::GpuContext;
 use bytemuck::{Pod, Zeroable};
 use lightlab_core::envmap::{self, EnvMaps, EnvSettings, Lobe};
@@ -45,6 +45,12 @@ pub struct EnvUniforms {
     pub faces: u32,
     pub mips: f32,
     pub texel_angle: f32,
+    /// Whether glossy surfaces reflect the maps (or the constant).
+    pub specular: u32,
+    /// The irradiance map's first layer; u32::MAX without one.
+    pub irradiance_layer: u32,
+    pub pad0: u32,
+    pub pad1: u32,
 }
 
 /// Group 2's entries of the term.
@@ -114,18 +120,22 @@ fn param_of(kind: EnvMapKind) -> Option<(Param, u32)> {
     }
 }
 
-/// The prefiltered maps of the scene's environment for `s`, or None when the term is off or
-/// reflects a constant (no map needed).
+/// The prefiltered maps of the scene's environment for `s`, or None when neither the specular
+/// term nor the irradiance map needs them (a constant ambient needs no map).
 pub fn prefiltered(scene: &Scene, s: &RasterSettings, camera: &Camera) -> Option<EnvMaps> {
-    let (param, _) = param_of(s.env_map)?;
     let env = scene.environment.as_ref()?;
     if s.ambient != Ambient::Environment {
         return None;
     }
-    let lobes = lobes(scene, s.env_prefilter);
-    if lobes.is_empty() {
+    let irradiance = s.env_diffuse == EnvDiffuse::Map;
+    let lobes = match s.env_map {
+        EnvMapKind::None => vec![],
+        _ => lobes(scene, s.env_prefilter),
+    };
+    if lobes.is_empty() && !irradiance {
         return None;
     }
+    let (param, _) = param_of(s.env_map).unwrap_or((Param::DualParaboloid, 1));
     let frame = match param {
         // Made for the camera's viewing direction: view space, viewer on +z.
         Param::SphereMap => glam::Mat3::from_mat4(camera.transform).transpose(),
@@ -138,6 +148,7 @@ pub fn prefiltered(scene: &Scene, s: &RasterSettings, camera: &Camera) -> Option
         roughness: roughness_levels(scene),
         lobes,
         samples: 128,
+        irradiance,
     };
     Some(envmap::prefilter(&env.image, env.intensity, &settings))
 }
@@ -156,6 +167,7 @@ impl EnvResources {
             None
         };
         let mut u = EnvUniforms::zeroed();
+        u.irradiance_layer = u32::MAX;
         if let Some(m) = &maps {
             for (i, r) in m.roughness.iter().enumerate() {
                 u.roughness[i / 4][i % 4] = *r;
@@ -163,7 +175,11 @@ impl EnvResources {
             let rows = m.frame.transpose();
             [u.row0, u.row1, u.row2] =
                 [rows.x_axis, rows.y_axis, rows.z_axis].map(|r| r.extend(0.0).to_array());
-            u.mode = param_of(s.env_map).map_or(0, |p| p.1);
+            u.mode = param_of(s.env_map).map_or(1, |p| p.1);
+            u.specular = u32::from(!m.lobes.is_empty());
+            if m.irradiance {
+                u.irradiance_layer = (m.layers.len() - m.faces()) as u32;
+            }
             u.levels = m.roughness.len() as u32;
             u.phong_set = m.lobes.iter().position(|l| *l == Lobe::Phong).unwrap_or(0) as u32;
             u.ggx_set = m.lobes.iter().position(|l| *l == Lobe::Ggx).unwrap_or(0) as u32;
@@ -174,6 +190,7 @@ impl EnvResources {
             (enabled, s.ambient, param_of(s.env_map))
         {
             u.mode = 4;
+            u.specular = 1;
             u.constant = c.extend(1.0).to_array();
         }
         u.prefilter = match s.env_prefilter {
@@ -184,12 +201,14 @@ impl EnvResources {
         let device = &ctx.device;
         let summary = match (&maps, u.mode) {
             (Some(m), _) => Some(format!(
-                "{} environment map, {} face(s) of {}², roughness levels {:?}, lobes {:?}, {:.1} MB",
-                s.env_map,
+                "{:?} environment map, {} face(s) of {}², roughness levels {:?}, lobes {:?}, \
+                 irradiance map {}, {:.1} MB",
+                m.param,
                 m.faces(),
                 m.size,
                 m.roughness,
                 m.lobes,
+                m.irradiance,
                 m.bytes() as f64 / 1e6
             )),
             (None, 4) => Some("constant environment".into()),
@@ -347,7 +366,11 @@ mod tests {
             prefilter,
             faces,
             mips,
-            texel_angle
+            texel_angle,
+            specular,
+            irradiance_layer,
+            pad0,
+            pad1
         );
         check_struct(src, "EnvUniforms", &layout).unwrap_or_else(|e| panic!("{e}"));
     }

@@ -33,8 +33,8 @@ mod targets;
 
 pub use ambient::{LightmapInput, SourceKind};
 pub use settings::{
-    Ambient, BadAmbient, EnvMapKind, EnvPrefilter, FrameTimes, MAX_AREA_LIGHTS, RasterError,
-    RasterSettings, RenderPath, ShadowMethod, projection,
+    Ambient, BadAmbient, EnvDiffuse, EnvMapKind, EnvPrefilter, FrameTimes, MAX_AREA_LIGHTS,
+    RasterError, RasterSettings, RenderPath, ShadowMethod, projection,
 };
 
 use crate::GpuContext;

@@ -85,6 +85,21 @@ lightlab_core::named_enum!(EnvPrefilter, "environment prefilter", {
     Ggx => "ggx",
 });
 
+/// The diffuse part of the environment light in the Phong techniques' ambient term.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvDiffuse {
+    /// Nine SH coefficients of irradiance (Ramamoorthi & Hanrahan 2001).
+    Sh,
+    /// An irradiance map (Heidrich Eq 8.13) in the `--env-map` parameterisation (the dual
+    /// paraboloid when that is `none`).
+    Map,
+}
+
+lightlab_core::named_enum!(EnvDiffuse, "environment diffuse", {
+    Sh => "sh",
+    Map => "map",
+});
+
 /// The constant or environment light of the ambient term (Fuchs's ambient uses the light-map;
 /// until light-maps exist it is this irradiance).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,6 +182,7 @@ pub struct RasterSettings {
     /// ambient reflects as a constant environment).
     pub env_map: EnvMapKind,
     pub env_prefilter: EnvPrefilter,
+    pub env_diffuse: EnvDiffuse,
     /// Texels of the environment map's level 0 over all faces (equal memory across
     /// parameterisations).
     pub env_texels: u32,
@@ -198,6 +214,7 @@ impl Default for RasterSettings {
             area_lights: true,
             env_map: EnvMapKind::DualParaboloid,
             env_prefilter: EnvPrefilter::Auto,
+            env_diffuse: EnvDiffuse::Sh,
             env_texels: 2 * 256 * 256,
         }
     }

@@ -21,6 +21,12 @@ struct EnvUniforms {
     faces: u32,
     mips: f32,
     texel_angle: f32,
+    // Whether glossy surfaces reflect the maps (or the constant).
+    specular: u32,
+    // The irradiance map's first layer (E/π); 0xffffffff without one.
+    irradiance_layer: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 @group(2) @binding(20) var env_maps: texture_2d_array<f32>;
@@ -122,13 +128,21 @@ fn env_lobe(lobe_set: u32, roughness: f32, d: vec3<f32>, lod: f32) -> vec3<f32> 
 fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32) -> vec3<f32> {
     var out = vec3<f32>(0.0);
     let nv = dot(s.n, v);
-    if env_u.mode != 0u {
+    if env_u.specular != 0u {
         let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (nv > 0.0);
         if glossy {
             out = env_glossy(s, nv, r, dr);
         }
     }
     return out;
+}
+
+// E/π of the irradiance map around world direction n (Heidrich Eq 8.13).
+fn env_irradiance(n: vec3<f32>) -> vec3<f32> {
+    let m = normalize(vec3<f32>(dot(env_u.row0.xyz, n), dot(env_u.row1.xyz, n), dot(env_u.row2.xyz, n)));
+    let fuv = env_face_uv(m);
+    let layer = env_u.irradiance_layer + u32(fuv.x);
+    return textureSampleLevel(env_maps, env_sampler, fuv.yz, layer, 0.0).rgb;
 }
 
 fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32) -> vec3<f32> {

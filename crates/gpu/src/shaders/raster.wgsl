@@ -146,14 +146,21 @@ fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     return source_radiance(s, in, nv) + env_specular(s, v, r, dr);
 }
 
-// The environment's unshadowed SH irradiance (frame.ambient_sh) on the diffuse surface.
+// The environment's unshadowed irradiance on the diffuse surface: from its SH coefficients
+// (frame.ambient_sh), or the irradiance map (`--env-diffuse map`, env.wgsl).
 fn sky_ambient(s: Surface) -> vec3<f32> {
-    let y = sh9(s.n);
-    var e = vec3<f32>(0.0);
-    for (var k = 0u; k < 9u; k++) {
-        e += frame.ambient_sh[k].xyz * y[k];
+    var out = vec3<f32>(0.0);
+    if env_u.irradiance_layer != 0xffffffffu {
+        out = s.diffuse * env_irradiance(s.n);
+    } else {
+        let y = sh9(s.n);
+        var e = vec3<f32>(0.0);
+        for (var k = 0u; k < 9u; k++) {
+            e += frame.ambient_sh[k].xyz * y[k];
+        }
+        out = s.diffuse / PI * max(e, vec3<f32>(0.0));
     }
-    return s.diffuse / PI * max(e, vec3<f32>(0.0));
+    return out;
 }
 
 // ---- shadow maps -------------------------------------------------------------------------------
