@@ -163,3 +163,57 @@ fn the_irradiance_map_lights_diffuse_surfaces_like_the_path_tracer() {
     );
     assert!(e[0] <= 0.002, "irradiance map: relMSE {}", e[0]);
 }
+
+/// A clear glass ball (KHR_materials_transmission 1, ior 1.5) in the environment: the GPU's
+/// one-interface refraction against the path tracer's two interfaces. Reported, and bounded
+/// loosely: the approximation does not invert the image as a real ball lens does.
+#[test]
+fn glass_refracts_the_environment() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |n: &str| tmp.path().join(n);
+    let mut scene = ball(0.0, BrdfModel::Pbr);
+    let m = &mut scene.materials[0];
+    m.metallic = 0.0;
+    m.base_color = Vec4::ONE;
+    m.specular_transmission = 1.0;
+    m.ior = 1.5;
+    let glb = p("glass.glb");
+    lightlab_scene::gltf_io::export(&scene, &glb).unwrap();
+    let back = lightlab_scene::load(glb.to_str().unwrap(), Default::default()).unwrap();
+    assert_eq!(
+        (
+            back.materials[0].specular_transmission,
+            back.materials[0].ior
+        ),
+        (1.0, 1.5)
+    );
+    let reference = p("ref.exr");
+    render(
+        &glb,
+        "reference",
+        &["--spp", "256", "--max-depth", "32"],
+        &reference,
+    );
+    let gpu = p("gpu.exr");
+    render(&glb, "phong-shadow-maps", &["--ssaa", "2"], &gpu);
+    let none = p("none.exr");
+    render(&glb, "phong-shadow-maps", &["--env-map", "none"], &none);
+    let (e, without) = (
+        sphere_relmse(&scene, &gpu, &reference),
+        sphere_relmse(&scene, &none, &reference),
+    );
+    eprintln!("glass ball: relMSE one-interface refraction {e:.4} (none {without:.3})");
+    if let Ok(keep) = std::env::var("LIGHTLAB_KEEP") {
+        for (f, to) in [
+            (&reference, "glass-ref.exr"),
+            (&gpu, "glass-gpu.exr"),
+            (&glb, "glass.glb"),
+        ] {
+            let _ = std::fs::copy(f, Path::new(&keep).join(to));
+        }
+    }
+    assert!(
+        e < 0.5 * without,
+        "refraction does not help: {e} vs {without}"
+    );
+}

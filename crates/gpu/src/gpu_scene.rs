@@ -448,8 +448,12 @@ fn gpu_material(m: &lightlab_scene::Material) -> GpuMaterial {
         flags,
         uv_sets,
         sway: m.sway,
-        pad0: 0.0,
-        pad1: 0.0,
+        ior: m.ior,
+        spec_transmission: if m.brdf == lightlab_scene::BrdfModel::Pbr {
+            m.specular_transmission
+        } else {
+            0.0
+        },
         pad2: 0.0,
         uv_transform,
     }

@@ -141,8 +141,8 @@ pub struct GpuMaterial {
     pub flags: u32,
     pub uv_sets: u32,
     pub sway: f32,
-    pub pad0: f32,
-    pub pad1: f32,
+    pub ior: f32,
+    pub spec_transmission: f32,
     pub pad2: f32,
     /// The KHR_texture_transform of each texture (WGSL comment), two rows each.
     pub uv_transform: [[f32; 4]; 12],
@@ -266,8 +266,8 @@ mod tests {
                     flags,
                     uv_sets,
                     sway,
-                    pad0,
-                    pad1,
+                    ior,
+                    spec_transmission,
                     pad2,
                     uv_transform
                 ),

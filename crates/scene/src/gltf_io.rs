@@ -35,8 +35,10 @@ pub const MAX_NODE_DEPTH: usize = 1024;
 /// bounds its vertex buffers: about 10 GB).
 pub const MAX_TRIANGLES: u64 = 100_000_000;
 
-pub const SUPPORTED_EXTENSIONS: [&str; 6] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 8] = [
     "KHR_lights_punctual",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
     "KHR_texture_transform",
     "EXT_mesh_gpu_instancing",
     "KHR_materials_emissive_strength",
@@ -380,14 +382,10 @@ impl Importer<'_> {
     /// One warning per feature of the file that lightlab does not render yet, so that nothing
     /// is dropped in silence.
     fn ignored_features(&mut self) {
-        const EXTENSIONS: [(&str, &str); 3] = [
-            (
-                "KHR_materials_transmission",
-                "transmission is ignored (surfaces are opaque)",
-            ),
-            ("KHR_materials_ior", "the index of refraction is ignored"),
-            ("KHR_materials_volume", "volumes are ignored"),
-        ];
+        const EXTENSIONS: [(&str, &str); 1] = [(
+            "KHR_materials_volume",
+            "volumes are ignored (transmissive surfaces are thin interfaces)",
+        )];
         let used: Vec<&str> = self.doc.extensions_used().collect();
         for (ext, what) in EXTENSIONS {
             if used.contains(&ext) {
@@ -399,6 +397,16 @@ impl Importer<'_> {
                 .meshes()
                 .flat_map(|m| m.primitives().collect::<Vec<_>>())
         };
+        if self.doc.materials().any(|m| {
+            m.transmission()
+                .and_then(|t| t.transmission_texture())
+                .is_some()
+        }) {
+            self.scene.warnings.push(
+                "KHR_materials_transmission: transmission textures are ignored (the factor applies)"
+                    .into(),
+            );
+        }
         if self.doc.skins().next().is_some() || prims().any(|p| p.morph_targets().next().is_some())
         {
             self.scene
@@ -583,6 +591,13 @@ impl Importer<'_> {
             transmission_texture,
             sway,
             brdf,
+            specular_transmission: m
+                .transmission()
+                .map_or(0.0, |t| t.transmission_factor().clamp(0.0, 1.0)),
+            ior: m
+                .ior()
+                .filter(|n| n.is_finite() && *n >= 1.0)
+                .unwrap_or(1.5),
         })
     }
 
@@ -1214,6 +1229,17 @@ impl Writer {
                     "KHR_materials_specular".into(),
                     json!({ "specularFactor": m.specular }),
                 );
+            }
+            if m.specular_transmission != 0.0 {
+                use_ext("KHR_materials_transmission", &mut used);
+                exts.insert(
+                    "KHR_materials_transmission".into(),
+                    json!({ "transmissionFactor": m.specular_transmission }),
+                );
+            }
+            if m.ior != 1.5 {
+                use_ext("KHR_materials_ior", &mut used);
+                exts.insert("KHR_materials_ior".into(), json!({ "ior": m.ior }));
             }
             if m.transmission != 0.0 {
                 use_ext("KHR_materials_diffuse_transmission", &mut used);

@@ -343,6 +343,14 @@ pub struct Material {
     pub sway: f32,
     /// The reflection model (glTF `extras.lightlab.brdf`; default the glTF model).
     pub brdf: BrdfModel,
+    /// KHR_materials_transmission `transmissionFactor`: the fraction of the base layer that is a
+    /// smooth dielectric interface (glass) rather than diffuse; refracted light is tinted by the
+    /// base colour. The path tracer refracts through it (Fresnel, total internal reflection);
+    /// the GPU looks the refracted direction up in the environment map.
+    pub specular_transmission: f32,
+    /// KHR_materials_ior: the dielectric's index of refraction (F0 = ((n−1)/(n+1))², 0.04 at
+    /// the default 1.5).
+    pub ior: f32,
 }
 
 impl Default for Material {
@@ -366,6 +374,8 @@ impl Default for Material {
             transmission_texture: None,
             sway: 0.0,
             brdf: BrdfModel::Pbr,
+            specular_transmission: 0.0,
+            ior: 1.5,
         }
     }
 }
@@ -379,6 +389,13 @@ impl Material {
             specular: 0.0,
             ..Default::default()
         }
+    }
+
+    /// The dielectric's reflectance at normal incidence, ((n−1)/(n+1))², times the specular
+    /// factor (0.04 · specular at n = 1.5).
+    pub fn dielectric_f0(&self) -> f32 {
+        let r = (self.ior - 1.0) / (self.ior + 1.0);
+        r * r * self.specular
     }
 
     /// Emitted radiance (before any emissive texture).

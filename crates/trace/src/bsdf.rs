@@ -9,6 +9,13 @@
 //!   `metallic = 0` and `specular = 0` this is exactly Lambert.
 //! - Specular: Trowbridge–Reitz (GGX) D with α = roughness², height-correlated Smith G2, Schlick
 //!   Fresnel with F0 = mix(0.04·specular, base, metallic) (glTF metallic–roughness).
+//! - Specular transmission (KHR_materials_transmission, factor t): a fraction t of the BSDF is
+//!   a smooth dielectric interface of index `ior` — reflection with the exact Fresnel
+//!   reflectance, refraction (tinted by the base colour) otherwise, total internal reflection
+//!   included — and the rest, (1−t), the model above. The interface is a delta lobe: `eval` and
+//!   `pdf` hold only the (1−t) part, and `sample` returns the delta branch with a pdf of
+//!   [`DELTA_PDF`], so that `f·cos/pdf` is its weight and multiple importance sampling gives the
+//!   BSDF sample all the weight. Roughness does not blur the interface (no rough BTDF).
 //! - Sampling: one lobe chosen by its estimated albedo; diffuse by cosine (flipped for
 //!   transmission), specular by the distribution of normals D(h)·cosθh. The returned pdf is the
 //!   one-sample mixture, as multiple importance sampling needs.
@@ -21,8 +28,17 @@ use lightlab_core::sampling::cosine_hemisphere;
 use lightlab_scene::{BrdfModel, Material, Scene};
 use std::f32::consts::PI;
 
+/// The pdf reported for a delta lobe's sample (see the module doc).
+pub const DELTA_PDF: f32 = 1e8;
+
 #[derive(Clone, Copy, Debug)]
 pub struct Bsdf {
+    /// Weight of the smooth dielectric interface (KHR_materials_transmission).
+    pub delta: f32,
+    pub ior: f32,
+    /// Whether `wo` lies outside the dielectric (on the surface's authored front side): the
+    /// path tracer sets it per hit; refraction goes from 1 to `ior` when true.
+    pub entering: bool,
     pub base: Vec3,
     pub kd_scale: f32,
     pub transmission: f32,
@@ -70,7 +86,7 @@ impl Bsdf {
         if let Some(r) = material.transmission_texture {
             transmission *= scene.sample(r, uv).w;
         }
-        let f0d = 0.04 * material.specular;
+        let f0d = material.dielectric_f0();
         let f0 = Vec3::splat(f0d).lerp(base, metallic);
         let model = material.brdf;
         let specular = model != BrdfModel::Lambert && (metallic > 0.0 || material.specular > 0.0);
@@ -98,6 +114,13 @@ impl Bsdf {
             (ws / (ws + wd)).clamp(0.1, 0.9)
         };
         Bsdf {
+            delta: if model == BrdfModel::Pbr {
+                material.specular_transmission.clamp(0.0, 1.0) * (1.0 - metallic)
+            } else {
+                0.0
+            },
+            ior: material.ior,
+            entering: true,
             base,
             kd_scale,
             transmission: transmission.clamp(0.0, 1.0),
@@ -115,6 +138,9 @@ impl Bsdf {
     /// irradiance/π.
     pub fn lambert(albedo: Vec3) -> Bsdf {
         Bsdf {
+            delta: 0.0,
+            ior: 1.5,
+            entering: true,
             base: albedo,
             kd_scale: 1.0,
             transmission: 0.0,
@@ -146,8 +172,12 @@ impl Bsdf {
         }
     }
 
-    /// BSDF value f(wo, wi) (without the cosine).
+    /// BSDF value f(wo, wi) (without the cosine; the delta interface excluded).
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        self.eval_smooth(wo, wi) * (1.0 - self.delta)
+    }
+
+    fn eval_smooth(&self, wo: Vec3, wi: Vec3) -> Vec3 {
         let diffuse = self.base * (self.kd_scale / PI);
         if wi.z <= 0.0 {
             return diffuse * self.transmission;
@@ -169,6 +199,10 @@ impl Bsdf {
 
     /// Density of [`Self::sample`] choosing `wi` (solid angle).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdf_smooth(wo, wi) * (1.0 - self.delta)
+    }
+
+    fn pdf_smooth(&self, wo: Vec3, wi: Vec3) -> f32 {
         let pd = if wi.z > 0.0 {
             (1.0 - self.transmission) * wi.z / PI
         } else {
@@ -187,6 +221,10 @@ impl Bsdf {
 
     /// Sample an incident direction: (wi, f, pdf), or None when the sample is invalid.
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+        if u_lobe < self.delta {
+            return self.sample_interface(wo, u_lobe / self.delta);
+        }
+        let u_lobe = (u_lobe - self.delta) / (1.0 - self.delta);
         let wi = if u_lobe < self.p_spec {
             if let Some(wi) = self.classic(|b| b.sample(wo.as_dvec3(), u.as_dvec2())) {
                 wi?.as_vec3()
@@ -212,6 +250,33 @@ impl Bsdf {
             return None;
         }
         Some((wi, self.eval(wo, wi), pdf))
+    }
+
+    /// The smooth dielectric interface: reflect with probability F (exact Fresnel), refract
+    /// otherwise; the returned f·|cos|/pdf is the branch's weight (1 for reflection, the base
+    /// colour for refraction).
+    fn sample_interface(&self, wo: Vec3, u: f32) -> Option<(Vec3, Vec3, f32)> {
+        // η = n_incident / n_transmitted for the refracted direction.
+        let eta = if self.entering {
+            1.0 / self.ior
+        } else {
+            self.ior
+        };
+        let cos_o = wo.z;
+        let f = lightlab_core::brdf::fresnel_dielectric(cos_o as f64, 1.0 / eta as f64) as f32;
+        let (wi, weight) = if u < f {
+            (Vec3::new(-wo.x, -wo.y, wo.z), Vec3::ONE)
+        } else {
+            let sin2_t = eta * eta * (1.0 - cos_o * cos_o).max(0.0);
+            if sin2_t >= 1.0 {
+                // Total internal reflection (F = 1 there, so this branch is not reached).
+                return None;
+            }
+            let cos_t = (1.0 - sin2_t).sqrt();
+            (Vec3::new(-wo.x * eta, -wo.y * eta, -cos_t), self.base)
+        };
+        let wi = wi.normalize();
+        Some((wi, weight * DELTA_PDF / wi.z.abs().max(1e-8), DELTA_PDF))
     }
 }
 

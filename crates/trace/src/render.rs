@@ -374,7 +374,9 @@ impl<'a> PathTracer<'a> {
             if wo_l.z <= 0.0 {
                 break;
             }
-            let bsdf = Bsdf::new(scene, mat, sf.uv, wo_l.z);
+            let mut bsdf = Bsdf::new(scene, mat, sf.uv, wo_l.z);
+            // A dielectric refracts from outside (the authored front side) inwards.
+            bsdf.entering = side > 0.0;
             depth += 1;
             // Next-event estimation.
             if keep(depth) {

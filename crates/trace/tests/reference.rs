@@ -460,3 +460,97 @@ fn square_area_light_matches_the_form_factor() {
         got.x
     );
 }
+
+/// An environment of radiance 1 where `lit(direction)`, 0 elsewhere.
+fn env_where(lit: impl Fn(Vec3) -> bool) -> Environment {
+    let (w, h) = (128u32, 64u32);
+    let data = (0..w * h)
+        .map(|i| {
+            let uv = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5)
+                / Vec2::new(w as f32, h as f32);
+            if lit(Environment::uv_to_dir(uv)) {
+                Vec3::ONE
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    Environment {
+        image: Image {
+            width: w,
+            height: h,
+            data,
+        },
+        intensity: 1.0,
+    }
+}
+
+fn glass() -> Material {
+    Material {
+        base_color: glam::Vec4::ONE,
+        roughness: 0.0,
+        specular_transmission: 1.0,
+        ior: 1.5,
+        ..Material::diffuse("glass", Vec3::ONE)
+    }
+}
+
+/// A clear glass slab in front of a white sky, seen at normal incidence: the light behind comes
+/// through with T²/(1−R²) (both faces' Fresnel transmittance, every inner reflection pair
+/// summed), R = ((n−1)/(n+1))². A closed glass sphere in a uniform sky neither gains nor loses
+/// light (reflection, refraction and total internal reflection conserve it).
+#[test]
+fn smooth_glass_refracts_with_fresnel_and_conserves_energy() {
+    let mut s = Scene::default();
+    let m = s.add_material(glass());
+    s.add_mesh(
+        geom::aabb_box(
+            "slab",
+            Vec3::new(-1.0, -1.0, -0.05),
+            Vec3::new(1.0, 1.0, 0.05),
+            m,
+        ),
+        Mat4::IDENTITY,
+    );
+    s.environment = Some(env_where(|d| d.z < -0.5));
+    s.cameras
+        .push(camera_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO));
+    let accel = Accel::new(&s);
+    let pt = PathTracer::new(&s, &accel);
+    let settings = RenderSettings {
+        max_depth: 64,
+        seed: 5,
+        ..Default::default()
+    };
+    let l = mean_radiance(&pt, Vec3::new(0.01, 0.02, 3.0), -Vec3::Z, &settings, 20_000).x;
+    let r = 0.04f32;
+    let expect = (1.0 - r) * (1.0 - r) / (1.0 - r * r);
+    eprintln!("glass slab: {l} against T²/(1−R²) = {expect}");
+    assert!(
+        (l - expect).abs() < 0.01,
+        "slab transmits {l}, expected {expect}"
+    );
+
+    let mut s = Scene::default();
+    let m = s.add_material(glass());
+    s.add_mesh(
+        flat_shaded(geom::sphere("ball", 1.0, 48, 24, m)),
+        Mat4::IDENTITY,
+    );
+    s.environment = Some(env_where(|_| true));
+    s.cameras
+        .push(camera_at(Vec3::new(0.0, 0.3, 3.0), Vec3::ZERO));
+    let accel = Accel::new(&s);
+    let pt = PathTracer::new(&s, &accel);
+    let settings = RenderSettings {
+        width: 24,
+        height: 24,
+        spp: 256,
+        max_depth: 256,
+        seed: 7,
+        ..Default::default()
+    };
+    let mean = pt.render(&settings, &|_, _| true).unwrap().mean();
+    eprintln!("glass sphere in a white sky: mean {mean}");
+    assert!((mean.x - 1.0).abs() < 0.01, "glass sphere furnace: {mean}");
+}

@@ -136,8 +136,10 @@ struct GpuMaterial {
     uv_sets: u32,
     // Wind sway weight of the material's vertices (lightlab_core::wind).
     sway: f32,
-    pad0: f32,
-    pad1: f32,
+    // KHR_materials_ior and the KHR_materials_transmission factor (a smooth dielectric
+    // interface; env.wgsl refracts through it).
+    ior: f32,
+    spec_transmission: f32,
     pad2: f32,
     // KHR_texture_transform of texture i (bit order of `flags`): rows 2i and 2i + 1 of the
     // 2×3 matrix, uv' = (dot(row0.xy, uv) + row0.z, dot(row1.xy, uv) + row1.z).
@@ -172,6 +174,11 @@ struct Surface {
     roughness: f32,
     model: u32,
     transmission: f32,
+    // Weight of the smooth dielectric interface (glass), its index and its tint (the base
+    // colour); the other terms are scaled by 1 − delta (as the path tracer's BSDF).
+    delta: f32,
+    ior: f32,
+    tint: vec3<f32>,
 }
 
 fn sh9(n: vec3<f32>) -> array<f32, 9> {
@@ -227,6 +234,7 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
         return f * nl;
     }
     if s.model == 0u {
+        // The smooth lobe is 1 − delta of the BSDF; the glass interface is a delta lobe.
         let h = normalize(v + l);
         let a = max(s.roughness * s.roughness, 1e-3);
         let a2 = a * a;
@@ -234,7 +242,7 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
         let dd = nh * nh * (a2 - 1.0) + 1.0;
         let d = a2 / (PI * dd * dd);
         let g = 1.0 / (1.0 + ggx_lambda(nv, a) + ggx_lambda(nl, a));
-        f += schlick(dot(v, h), s.f0) * (d * g / (4.0 * nv * nl));
+        f += schlick(dot(v, h), s.f0) * (d * g / (4.0 * nv * nl) * (1.0 - s.delta));
     } else if s.model == 2u {
         let e = phong_exponent(s.roughness);
         let r = 2.0 * nv * s.n - v;
@@ -246,6 +254,21 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
         f += s.f0 * (norm * pow(max(dot(s.n, h), 0.0), e));
     }
     return f * nl;
+}
+
+// Exact unpolarised Fresnel reflectance for cosine c and relative index eta = n_t / n_i
+// (lightlab_core::brdf::fresnel_dielectric); 1 under total internal reflection.
+fn fresnel_dielectric(c_in: f32, eta: f32) -> f32 {
+    let c = min(abs(c_in), 1.0);
+    let g2 = eta * eta + c * c - 1.0;
+    var f = 1.0;
+    if g2 >= 0.0 {
+        let g = sqrt(g2);
+        let a = (g - c) / (g + c);
+        let b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0);
+        f = 0.5 * a * a * (1.0 + b * b);
+    }
+    return f;
 }
 
 // Fuchs (2005) §4.1 attenuation functions of d/r; atten₃ clamps before squaring (erratum).

@@ -131,10 +131,26 @@ fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32) -> vec3<f32> {
     if env_u.specular != 0u {
         let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (nv > 0.0);
         if glossy {
-            out = env_glossy(s, nv, r, dr);
+            out = env_glossy(s, nv, r, dr) * (1.0 - s.delta);
+        }
+        let glass = (s.delta > 0.0) & (nv > 0.0);
+        if glass {
+            out += env_glass(s, v, nv, r, dr) * s.delta;
         }
     }
     return out;
+}
+
+// The smooth dielectric interface (Heidrich §8.3.1, §8.3.3 with one interface): Fresnel-
+// weighted mirror reflection plus the refracted direction looked up in the same maps, tinted
+// by the base colour. One interface: the ray is not followed out of the object again.
+fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32) -> vec3<f32> {
+    let lod = clamp(log2(max(dr, 1e-8) / max(env_u.texel_angle, 1e-8)), 0.0, max(env_u.mips - 1.0, 0.0));
+    let f = fresnel_dielectric(nv, s.ior);
+    let t = refract(-v, s.n, 1.0 / s.ior);
+    let reflected = env_lobe(env_u.ggx_set, s.roughness, r, lod);
+    let refracted = env_lobe(env_u.ggx_set, s.roughness, safe_normalize(t, -v), lod);
+    return reflected * f + s.tint * refracted * (1.0 - f);
 }
 
 // E/π of the irradiance map around world direction n (Heidrich Eq 8.13).

@@ -116,8 +116,12 @@ fn surface(in: VertexOut, front: bool) -> Surface {
     }
     s.n = n;
     s.ng = ng;
-    s.diffuse = base.rgb * (1.0 - metallic);
-    s.f0d = 0.04 * material.specular;
+    s.delta = material.spec_transmission * (1.0 - metallic);
+    s.ior = material.ior;
+    s.tint = base.rgb;
+    s.diffuse = base.rgb * (1.0 - metallic) * (1.0 - s.delta);
+    let r = (material.ior - 1.0) / (material.ior + 1.0);
+    s.f0d = r * r * material.specular;
     s.f0 = mix(vec3<f32>(s.f0d), base.rgb, metallic);
     if material.model == 1u {
         s.f0 = vec3<f32>(0.0);
@@ -388,7 +392,7 @@ fn gbuffer_fs(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     o.normal = vec4<f32>(s.n, s.roughness);
     o.specular = vec4<f32>(s.f0, f32(s.model) + min(s.transmission, 0.99));
     // Camera-relative: keeps precision near the viewer when the target is 16-bit (GLES).
-    o.position = vec4<f32>(s.p - frame.camera_pos, 1.0);
+    o.position = vec4<f32>(s.p - frame.camera_pos, 1.0 + s.delta);
     // The geometric normal is not stored: the deferred path uses the shading normal for the
     // horizon test (documented deviation; the forward path is the exact one).
     return o;
@@ -420,6 +424,10 @@ fn gbuffer_surface(c: vec2<i32>) -> Surface {
     s.roughness = n.w;
     s.model = u32(floor(sp.a));
     s.transmission = fract(sp.a);
+    // The glass interface's weight rides on the position's w (1 + delta; 0 = no surface).
+    s.delta = textureLoad(gb_position, c, 0).w - 1.0;
+    s.ior = 1.5;
+    s.tint = vec3<f32>(1.0);
     return s;
 }
 

@@ -155,7 +155,7 @@ files["points_beside_triangles.gltf"] = g
 # Features lightlab does not render yet (transmission): loaded, with one warning each; beside
 # features it renders (texture transforms, GPU instancing, vertex colours), without one.
 g = base()
-g["extensionsUsed"] += ["KHR_materials_transmission", "KHR_texture_transform", "EXT_mesh_gpu_instancing"]
+g["extensionsUsed"] += ["KHR_materials_volume", "KHR_texture_transform", "EXT_mesh_gpu_instancing", "KHR_materials_transmission"]
 g["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = 1
 files["unsupported_features.gltf"] = g
 
