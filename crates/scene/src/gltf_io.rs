@@ -73,7 +73,9 @@ pub fn import_slice(path: &Path, bytes: &[u8], opts: LoadOptions) -> Result<Scen
     // Check required extensions on the raw JSON first, for a clearer message than the
     // validator's.
     check_required_extensions(path, bytes)?;
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| gltf_err(path, e))?;
+    let relaxed = without_required(bytes).map_err(|m| gltf_err(path, m))?;
+    let gltf = gltf::Gltf::from_slice(relaxed.as_deref().unwrap_or(bytes))
+        .map_err(|e| gltf_err(path, e))?;
     let gltf::Gltf { document, blob } = gltf;
     let inputs = crate::gltf_input::read(path, &document, blob, opts)?;
     let mut scene = Importer {
@@ -121,6 +123,56 @@ fn check_required_extensions(path: &Path, bytes: &[u8]) -> Result<(), SceneError
         }
     }
     Ok(())
+}
+
+/// The extensions lightlab reads that the gltf crate's validator refuses as *required* (it
+/// knows only its own features' extensions).
+const REQUIRED_FOR_LIGHTLAB: [&str; 3] = [
+    "EXT_mesh_gpu_instancing",
+    "KHR_materials_specular",
+    "KHR_materials_diffuse_transmission",
+];
+
+/// The file with [`REQUIRED_FOR_LIGHTLAB`] taken out of `extensionsRequired` (after
+/// `check_required_extensions` accepted it), so that the gltf crate parses it; None when there
+/// is nothing to take out. A GLB is rebuilt around the new JSON chunk.
+fn without_required(bytes: &[u8]) -> Result<Option<Vec<u8>>, String> {
+    let glb = bytes.starts_with(b"glTF");
+    let json = if glb { glb_json(bytes)? } else { bytes };
+    let mut v: Value = serde_json::from_slice(json).map_err(|e| e.to_string())?;
+    let Some(req) = v
+        .get_mut("extensionsRequired")
+        .and_then(|r| r.as_array_mut())
+    else {
+        return Ok(None);
+    };
+    let before = req.len();
+    req.retain(|e| {
+        !e.as_str()
+            .is_some_and(|e| REQUIRED_FOR_LIGHTLAB.contains(&e))
+    });
+    if req.len() == before {
+        return Ok(None);
+    }
+    let mut text = serde_json::to_vec(&v).map_err(|e| e.to_string())?;
+    if !glb {
+        return Ok(Some(text));
+    }
+    // Header, the JSON chunk padded with spaces to 4 bytes, then the rest as it was.
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let rest = &bytes[(20 + json.len()).next_multiple_of(4).min(bytes.len())..];
+    let total = 12 + 8 + text.len() + rest.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(rest);
+    Ok(Some(out))
 }
 
 /// The JSON chunk of a GLB, after checking the header and chunk lengths (the `gltf` crate

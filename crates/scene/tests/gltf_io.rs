@@ -538,6 +538,8 @@ fn instanced_file(dir: &Path, name: &str, counts: [usize; 3]) -> std::path::Path
     std::fs::write(dir.join(format!("{name}-inst.bin")), &bin).unwrap();
     triangle_file(dir, name, GOOD, true, |j| {
         j["extensionsUsed"] = serde_json::json!(["EXT_mesh_gpu_instancing"]);
+        // Required, as files without a fallback declare it (the gltf crate alone refuses that).
+        j["extensionsRequired"] = serde_json::json!(["EXT_mesh_gpu_instancing"]);
         j["nodes"][0]["translation"] = serde_json::json!([0.0, 0.0, 1.0]);
         j["nodes"][0]["extensions"] = serde_json::json!({ "EXT_mesh_gpu_instancing": {
             "attributes": { "TRANSLATION": 2, "ROTATION": 3, "SCALE": 4 } } });
@@ -582,6 +584,28 @@ fn gpu_instancing_draws_the_mesh_once_per_transform() {
         "{:?}",
         s.warnings
     );
+    // A GLB requiring KHR_materials_specular (rebuilt around the relaxed JSON).
+    let glb = dir.path().join("inst.glb");
+    lightlab_scene::gltf_io::export(&s, &glb).unwrap();
+    let mut bytes = std::fs::read(&glb).unwrap();
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut v: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    v["extensionsUsed"] = serde_json::json!(["KHR_materials_specular"]);
+    v["extensionsRequired"] = serde_json::json!(["KHR_materials_specular"]);
+    let mut text = serde_json::to_vec(&v).unwrap();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let rest = bytes[(20 + json_len).next_multiple_of(4)..].to_vec();
+    bytes.truncate(12);
+    bytes[8..12].copy_from_slice(&((20 + text.len() + rest.len()) as u32).to_le_bytes());
+    bytes.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    bytes.extend_from_slice(b"JSON");
+    bytes.extend_from_slice(&text);
+    bytes.extend_from_slice(&rest);
+    std::fs::write(&glb, &bytes).unwrap();
+    let g = load(glb.to_str().unwrap(), LoadOptions::default()).unwrap();
+    assert_eq!(g.instances.len(), 3);
     // Attributes of different counts are refused, naming the extension.
     let bad = instanced_file(dir.path(), "bad", [3, 2, 3]);
     let msg = load_err(&bad);
