@@ -159,7 +159,7 @@ fn without_required(bytes: &[u8]) -> Result<Option<Vec<u8>>, String> {
         return Ok(Some(text));
     }
     // Header, the JSON chunk padded with spaces to 4 bytes, then the rest as it was.
-    while text.len() % 4 != 0 {
+    while !text.len().is_multiple_of(4) {
         text.push(b' ');
     }
     let rest = &bytes[(20 + json.len()).next_multiple_of(4).min(bytes.len())..];

@@ -593,7 +593,7 @@ fn gpu_instancing_draws_the_mesh_once_per_transform() {
     v["extensionsUsed"] = serde_json::json!(["KHR_materials_specular"]);
     v["extensionsRequired"] = serde_json::json!(["KHR_materials_specular"]);
     let mut text = serde_json::to_vec(&v).unwrap();
-    while text.len() % 4 != 0 {
+    while !text.len().is_multiple_of(4) {
         text.push(b' ');
     }
     let rest = bytes[(20 + json_len).next_multiple_of(4)..].to_vec();
