@@ -217,3 +217,32 @@ fn glass_refracts_the_environment() {
         "refraction does not help: {e} vs {without}"
     );
 }
+
+/// Heidrich's Fig 8.8: Fresnel-weighted mirror reflections of black dielectrics of index 1.5, 5
+/// and 200 (F0 0.04, 0.44, 0.98; Schlick's approximation in both renderers), and a slightly
+/// glossy one (roughness 0.1), against the path tracer.
+#[test]
+fn fresnel_weighted_reflections_follow_the_index_of_refraction() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |n: &str| tmp.path().join(n);
+    let mut means = vec![];
+    for (ior, roughness) in [(1.5f32, 0.0f32), (5.0, 0.0), (200.0, 0.0), (1.5, 0.1)] {
+        let mut scene = ball(roughness, BrdfModel::Pbr);
+        let m = &mut scene.materials[0];
+        m.metallic = 0.0;
+        m.base_color = Vec4::new(0.0, 0.0, 0.0, 1.0);
+        m.ior = ior;
+        let glb = p("fresnel.glb");
+        lightlab_scene::gltf_io::export(&scene, &glb).unwrap();
+        let (reference, gpu) = (p("ref.exr"), p("gpu.exr"));
+        render(&glb, "reference", &["--spp", "256"], &reference);
+        render(&glb, "phong-shadow-maps", &["--ssaa", "2"], &gpu);
+        let e = sphere_relmse(&scene, &gpu, &reference);
+        let img = Image::read(&gpu).unwrap();
+        means.push(img.data.iter().map(|c| c.x as f64).sum::<f64>() / img.data.len() as f64);
+        eprintln!("Fresnel ior {ior}, roughness {roughness}: relMSE {e:.4}");
+        assert!(e <= 0.01, "ior {ior} roughness {roughness}: relMSE {e}");
+    }
+    // More of the environment is reflected as the index grows.
+    assert!(means[0] < means[1] && means[1] < means[2], "{means:?}");
+}
