@@ -246,6 +246,11 @@ pub struct RasterArgs {
     /// irradiance) or map (an irradiance map, Heidrich Eq 8.13).
     #[arg(long, default_value = "sh")]
     pub env_diffuse: EnvDiffuse,
+    /// Dynamic environment maps: render the scene into a cube at the centre of its most
+    /// mirror-like object (metallic or glass, roughness under 0.3), which then reflects its
+    /// neighbours.
+    #[arg(long)]
+    pub dynamic_env: bool,
     /// Texels of the environment map's finest level over all its faces (the same memory for
     /// every parameterisation; each roughness level holds as many).
     #[arg(long, default_value_t = 2 * 256 * 256)]
@@ -272,6 +277,7 @@ impl Default for RasterArgs {
             env_map: EnvMapKind::DualParaboloid,
             env_prefilter: EnvPrefilter::Auto,
             env_diffuse: EnvDiffuse::Sh,
+            dynamic_env: false,
             env_texels: 2 * 256 * 256,
         }
     }
@@ -318,6 +324,7 @@ impl RasterArgs {
             env_map: self.env_map,
             env_prefilter: self.env_prefilter,
             env_diffuse: self.env_diffuse,
+            dynamic_env: self.dynamic_env,
             env_texels: self.env_texels,
             ..Default::default()
         })

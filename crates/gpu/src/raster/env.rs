@@ -49,8 +49,10 @@ pub struct EnvUniforms {
     pub specular: u32,
     /// The irradiance map's first layer; u32::MAX without one.
     pub irradiance_layer: u32,
-    pub pad0: u32,
-    pub pad1: u32,
+    /// The scene instance that reflects the dynamic maps (u32::MAX: none), and where their
+    /// layers start (they follow the static ones, in the same layout).
+    pub dynamic_instance: u32,
+    pub dynamic_base: u32,
 }
 
 /// Group 2's entries of the term.
@@ -161,13 +163,26 @@ impl EnvResources {
         camera: &Camera,
         enabled: bool,
     ) -> EnvResources {
-        let maps = if enabled {
+        let mut maps = if enabled {
             prefiltered(scene, s, camera)
         } else {
             None
         };
         let mut u = EnvUniforms::zeroed();
         u.irradiance_layer = u32::MAX;
+        u.dynamic_instance = u32::MAX;
+        if let (Some(m), true) = (maps.as_mut(), s.dynamic_env)
+            && let Some(i) = dynamic_instance(scene)
+        {
+            match dynamic(ctx, scene, s, i, m) {
+                Ok(layers) => {
+                    u.dynamic_instance = i as u32;
+                    u.dynamic_base = m.layers.len() as u32;
+                    m.layers.extend(layers);
+                }
+                Err(e) => eprintln!("warning: no dynamic environment map: {e}"),
+            }
+        }
         if let Some(m) = &maps {
             for (i, r) in m.roughness.iter().enumerate() {
                 u.roughness[i / 4][i % 4] = *r;
@@ -244,6 +259,113 @@ impl EnvResources {
             entry(23, self.uniforms.as_entire_binding()),
         ]
     }
+}
+
+/// The instance whose surroundings matter most in its reflection: the smoothest of the
+/// mirror-like ones (metallic or glass, roughness under 0.3); None when there is none.
+pub fn dynamic_instance(scene: &Scene) -> Option<usize> {
+    let score = |i: usize| {
+        let m = &scene.materials[scene.meshes[scene.instances[i].mesh].material];
+        let mirror = m.metallic.max(m.specular_transmission);
+        (mirror >= 0.5 && m.roughness < 0.3).then_some(m.roughness - mirror)
+    };
+    (0..scene.instances.len())
+        .filter_map(|i| score(i).map(|s| (i, s)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i)
+}
+
+/// Face size of the dynamic cube renders.
+const DYNAMIC_FACE: u32 = 128;
+
+/// Dynamic environment maps (issue 20): the scene around instance `i` rendered from its
+/// centre into the six faces of a cube (wgpu has no geometry shaders, so six passes of the
+/// whole renderer, one camera each, with shadow volumes, which hold for any camera), resampled
+/// into a lat-long image and prefiltered like the static maps (`maps`' layout); the layers to
+/// append. Neighbours closer than the object's own radius are seen from its centre, not its
+/// surface (the parallax a centre-projected map cannot have).
+pub fn dynamic(
+    ctx: &GpuContext,
+    scene: &Scene,
+    s: &RasterSettings,
+    i: usize,
+    maps: &EnvMaps,
+) -> Result<Vec<Vec<Vec<glam::Vec3>>>, super::RasterError> {
+    use glam::Vec3;
+    let (lo, hi) = scene
+        .instance_bounds(i)
+        .ok_or_else(|| super::RasterError::Settings("the dynamic object is empty".into()))?;
+    let centre = (lo + hi) * 0.5;
+    // Seen from its centre, a closed single-sided object shows only back faces, which the
+    // rasteriser culls: it stays, invisible, and still casts its shadow on its neighbours. A
+    // double-sided one would hide everything, so it goes.
+    let mut sub = scene.clone();
+    if scene.materials[scene.meshes[scene.instances[i].mesh].material].double_sided {
+        sub.instances.remove(i);
+    }
+    let axes = [
+        (Vec3::X, Vec3::Y),
+        (-Vec3::X, Vec3::Y),
+        (Vec3::Y, Vec3::Z),
+        (-Vec3::Y, Vec3::Z),
+        (Vec3::Z, Vec3::Y),
+        (-Vec3::Z, Vec3::Y),
+    ];
+    let cameras: Vec<Camera> = axes
+        .iter()
+        .map(|&(f, up)| {
+            let mut c = Camera::look_at("cube face", centre, centre + f, up, 90f32.to_radians());
+            c.znear = 1e-3 * (hi - lo).length().max(1e-3);
+            c
+        })
+        .collect();
+    sub.cameras = cameras.clone();
+    let face_settings = RasterSettings {
+        width: DYNAMIC_FACE,
+        height: DYNAMIC_FACE,
+        camera: 0,
+        shadows: super::ShadowMethod::VolumesZFail,
+        dynamic_env: false,
+        ..s.clone()
+    };
+    let mut r = super::Renderer::new(ctx, &sub, face_settings)?;
+    let mut faces = vec![];
+    for cam in &cameras {
+        r.set_camera(ctx, cam.clone());
+        r.render(ctx);
+        faces.push(r.read_hdr(ctx)?);
+    }
+    // Lat-long resampling: each direction from the face whose axis it is closest to.
+    let (w, h) = (4 * DYNAMIC_FACE, 2 * DYNAMIC_FACE);
+    let mut latlong = lightlab_core::image::Image::new(w, h);
+    let t = (45f32.to_radians()).tan();
+    for y in 0..h {
+        for x in 0..w {
+            let uv = glam::Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+            let d = lightlab_scene::Environment::uv_to_dir(uv);
+            let k = (0..6)
+                .max_by(|&a, &b| d.dot(axes[a].0).total_cmp(&d.dot(axes[b].0)))
+                .unwrap_or(0);
+            let v = cameras[k].transform.inverse().transform_vector3(d);
+            let ndc = glam::Vec2::new(v.x, v.y) / (-v.z * t);
+            let px =
+                ((ndc.x + 1.0) * 0.5 * DYNAMIC_FACE as f32).clamp(0.0, DYNAMIC_FACE as f32 - 1.0);
+            let py =
+                ((1.0 - ndc.y) * 0.5 * DYNAMIC_FACE as f32).clamp(0.0, DYNAMIC_FACE as f32 - 1.0);
+            latlong.data[(y * w + x) as usize] =
+                faces[k].data[(py as u32 * DYNAMIC_FACE + px as u32) as usize];
+        }
+    }
+    let settings = EnvSettings {
+        param: maps.param,
+        frame: maps.frame,
+        size: maps.size,
+        roughness: maps.roughness.clone(),
+        lobes: maps.lobes.clone(),
+        samples: 128,
+        irradiance: false,
+    };
+    Ok(envmap::prefilter(&latlong, 1.0, &settings).layers)
 }
 
 /// The maps as one mip-mapped RGBA16F array (a 1×1 pair of layers without maps). Radiance is
@@ -369,8 +491,8 @@ mod tests {
             texel_angle,
             specular,
             irradiance_layer,
-            pad0,
-            pad1
+            dynamic_instance,
+            dynamic_base
         );
         check_struct(src, "EnvUniforms", &layout).unwrap_or_else(|e| panic!("{e}"));
     }

@@ -183,6 +183,9 @@ pub struct RasterSettings {
     pub env_map: EnvMapKind,
     pub env_prefilter: EnvPrefilter,
     pub env_diffuse: EnvDiffuse,
+    /// Dynamic environment maps: the scene rendered into a cube at the centre of its most
+    /// mirror-like object, which then reflects its neighbours (`raster::env::dynamic`).
+    pub dynamic_env: bool,
     /// Texels of the environment map's level 0 over all faces (equal memory across
     /// parameterisations).
     pub env_texels: u32,
@@ -215,6 +218,7 @@ impl Default for RasterSettings {
             env_map: EnvMapKind::DualParaboloid,
             env_prefilter: EnvPrefilter::Auto,
             env_diffuse: EnvDiffuse::Sh,
+            dynamic_env: false,
             env_texels: 2 * 256 * 256,
         }
     }

@@ -25,8 +25,9 @@ struct EnvUniforms {
     specular: u32,
     // The irradiance map's first layer (E/π); 0xffffffff without one.
     irradiance_layer: u32,
-    pad0: u32,
-    pad1: u32,
+    // The instance that reflects the dynamic maps (0xffffffff: none), and their first layer.
+    dynamic_instance: u32,
+    dynamic_base: u32,
 }
 
 @group(2) @binding(20) var env_maps: texture_2d_array<f32>;
@@ -91,15 +92,16 @@ fn env_level_roughness(i: u32) -> f32 {
 }
 
 // Level `level` of lobe set `lobe_set` around map direction m.
-fn env_read(lobe_set: u32, level: u32, m: vec3<f32>, lod: f32) -> vec3<f32> {
+// `base` is 0 for the static maps, or where the dynamic ones start.
+fn env_read(base: u32, lobe_set: u32, level: u32, m: vec3<f32>, lod: f32) -> vec3<f32> {
     let fuv = env_face_uv(m);
-    let layer = (lobe_set * env_u.levels + level) * env_u.faces + u32(fuv.x);
+    let layer = base + (lobe_set * env_u.levels + level) * env_u.faces + u32(fuv.x);
     return textureSampleLevel(env_maps, env_sampler, fuv.yz, layer, lod).rgb;
 }
 
 // The lobe-averaged radiance of set `lobe_set` at `roughness` around world direction d: the two
 // levels around it, interpolated (exact where a material's roughness has its own level).
-fn env_lobe(lobe_set: u32, roughness: f32, d: vec3<f32>, lod: f32) -> vec3<f32> {
+fn env_lobe(base: u32, lobe_set: u32, roughness: f32, d: vec3<f32>, lod: f32) -> vec3<f32> {
     if env_u.mode == 4u {
         return env_u.constant.rgb;
     }
@@ -113,11 +115,11 @@ fn env_lobe(lobe_set: u32, roughness: f32, d: vec3<f32>, lod: f32) -> vec3<f32> 
     }
     let rh = env_level_roughness(hi);
     if hi == 0u || rh <= roughness {
-        return env_read(lobe_set, hi, m, lod);
+        return env_read(base, lobe_set, hi, m, lod);
     }
     let rl = env_level_roughness(hi - 1u);
     let t = clamp((roughness - rl) / max(rh - rl, 1e-6), 0.0, 1.0);
-    return mix(env_read(lobe_set, hi - 1u, m, lod), env_read(lobe_set, hi, m, lod), t);
+    return mix(env_read(base, lobe_set, hi - 1u, m, lod), env_read(base, lobe_set, hi, m, lod), t);
 }
 
 // The environment reflected by the specular lobe of `s` towards v (unit, to the viewer): GGX
@@ -125,17 +127,19 @@ fn env_lobe(lobe_set: u32, roughness: f32, d: vec3<f32>, lod: f32) -> vec3<f32> 
 // reflected direction's change across a pixel (radians), which picks the minification level.
 // The uniform test stays apart from the per-fragment one: llvmpipe (Mesa 22.3, LLVM 15)
 // crashes compiling a branch whose condition mixes the two around these texture reads.
-fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32) -> vec3<f32> {
+fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) -> vec3<f32> {
     var out = vec3<f32>(0.0);
+    // The dynamic maps' layers for their instance (a layer offset: no branch on it).
+    let base = select(0u, env_u.dynamic_base, instance == env_u.dynamic_instance);
     let nv = dot(s.n, v);
     if env_u.specular != 0u {
         let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (nv > 0.0);
         if glossy {
-            out = env_glossy(s, nv, r, dr) * (1.0 - s.delta);
+            out = env_glossy(s, nv, r, dr, base) * (1.0 - s.delta);
         }
         let glass = (s.delta > 0.0) & (nv > 0.0);
         if glass {
-            out += env_glass(s, v, nv, r, dr) * s.delta;
+            out += env_glass(s, v, nv, r, dr, base) * s.delta;
         }
     }
     return out;
@@ -144,12 +148,12 @@ fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32) -> vec3<f32> {
 // The smooth dielectric interface (Heidrich §8.3.1, §8.3.3 with one interface): Fresnel-
 // weighted mirror reflection plus the refracted direction looked up in the same maps, tinted
 // by the base colour. One interface: the ray is not followed out of the object again.
-fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32) -> vec3<f32> {
+fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32, base: u32) -> vec3<f32> {
     let lod = clamp(log2(max(dr, 1e-8) / max(env_u.texel_angle, 1e-8)), 0.0, max(env_u.mips - 1.0, 0.0));
     let f = fresnel_dielectric(nv, s.ior);
     let t = refract(-v, s.n, 1.0 / s.ior);
-    let reflected = env_lobe(env_u.ggx_set, s.roughness, r, lod);
-    let refracted = env_lobe(env_u.ggx_set, s.roughness, safe_normalize(t, -v), lod);
+    let reflected = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
+    let refracted = env_lobe(base, env_u.ggx_set, s.roughness, safe_normalize(t, -v), lod);
     return reflected * f + s.tint * refracted * (1.0 - f);
 }
 
@@ -161,12 +165,12 @@ fn env_irradiance(n: vec3<f32>) -> vec3<f32> {
     return textureSampleLevel(env_maps, env_sampler, fuv.yz, layer, 0.0).rgb;
 }
 
-fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32) -> vec3<f32> {
+fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32, base: u32) -> vec3<f32> {
     let lod = clamp(log2(max(dr, 1e-8) / max(env_u.texel_angle, 1e-8)), 0.0, max(env_u.mips - 1.0, 0.0));
     let ggx = (env_u.prefilter == 2u) | ((env_u.prefilter == 0u) & (s.model == 0u));
     var out = vec3<f32>(0.0);
     if ggx {
-        let l = env_lobe(env_u.ggx_set, s.roughness, r, lod);
+        let l = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
         let ab = textureSampleLevel(env_lut, env_sampler, vec2<f32>(nv, s.roughness), 0.0).rg;
         out = l * (s.f0 * ab.x + ab.y);
     } else {
@@ -176,7 +180,7 @@ fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32) -> vec3<f32> {
             let e = phong_exponent(s.roughness) / 4.0;
             roughness = pow(2.0 / (max(e, 1.0) + 2.0), 0.25);
         }
-        let l = env_lobe(env_u.phong_set, roughness, r, lod);
+        let l = env_lobe(base, env_u.phong_set, roughness, r, lod);
         out = s.f0 * l * max(dot(s.n, r), 0.0);
     }
     return out;

@@ -147,7 +147,7 @@ fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     let v = safe_normalize(frame.camera_pos - s.p, s.n);
     let r = reflect(-v, s.n);
     let dr = max(length(dpdx(r)), length(dpdy(r)));
-    return source_radiance(s, in, nv) + env_specular(s, v, r, dr);
+    return source_radiance(s, in, nv) + env_specular(s, v, r, dr, in.instance);
 }
 
 // The environment's unshadowed irradiance on the diffuse surface: from its SH coefficients
