@@ -53,6 +53,13 @@ pub struct EnvUniforms {
     /// layers start (they follow the static ones, in the same layout).
     pub dynamic_instance: u32,
     pub dynamic_base: u32,
+    /// The dynamic maps' distance layers (distance from their centre, in red; mirror level).
+    pub dyn_distance_base: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+    /// The dynamic maps' centre; w = 1 when they have distances.
+    pub dyn_centre: [f32; 4],
 }
 
 /// Group 2's entries of the term.
@@ -175,10 +182,13 @@ impl EnvResources {
             && let Some(i) = dynamic_instance(scene)
         {
             match dynamic(ctx, scene, s, i, m) {
-                Ok(layers) => {
+                Ok(d) => {
                     u.dynamic_instance = i as u32;
                     u.dynamic_base = m.layers.len() as u32;
-                    m.layers.extend(layers);
+                    m.layers.extend(d.layers);
+                    u.dyn_distance_base = m.layers.len() as u32;
+                    m.layers.extend(d.distance);
+                    u.dyn_centre = d.centre.extend(1.0).to_array();
                 }
                 Err(e) => eprintln!("warning: no dynamic environment map: {e}"),
             }
@@ -278,19 +288,28 @@ pub fn dynamic_instance(scene: &Scene) -> Option<usize> {
 /// Face size of the dynamic cube renders.
 const DYNAMIC_FACE: u32 = 128;
 
+/// The dynamic maps of one object: colour layers (the static maps' layout), distance layers
+/// (mirror level, distance from `centre` in every channel) and the centre.
+pub struct DynamicMaps {
+    pub layers: Vec<Vec<Vec<glam::Vec3>>>,
+    pub distance: Vec<Vec<Vec<glam::Vec3>>>,
+    pub centre: glam::Vec3,
+}
+
 /// Dynamic environment maps (issue 20): the scene around instance `i` rendered from its
 /// centre into the six faces of a cube (wgpu has no geometry shaders, so six passes of the
 /// whole renderer, one camera each, with shadow volumes, which hold for any camera), resampled
 /// into a lat-long image and prefiltered like the static maps (`maps`' layout); the layers to
-/// append. Neighbours closer than the object's own radius are seen from its centre, not its
-/// surface (the parallax a centre-projected map cannot have).
+/// append. The faces' distances (from the deferred path's positions) go into a distance map,
+/// with which the shader corrects the parallax of a map projected from the centre (distance
+/// impostors, Szirmay-Kalos et al. 2005).
 pub fn dynamic(
     ctx: &GpuContext,
     scene: &Scene,
     s: &RasterSettings,
     i: usize,
     maps: &EnvMaps,
-) -> Result<Vec<Vec<Vec<glam::Vec3>>>, super::RasterError> {
+) -> Result<DynamicMaps, super::RasterError> {
     use glam::Vec3;
     let (lo, hi) = scene
         .instance_bounds(i)
@@ -325,19 +344,35 @@ pub fn dynamic(
         height: DYNAMIC_FACE,
         camera: 0,
         shadows: super::ShadowMethod::VolumesZFail,
+        path: super::RenderPath::Deferred,
         dynamic_env: false,
         ..s.clone()
     };
     let mut r = super::Renderer::new(ctx, &sub, face_settings)?;
     let mut faces = vec![];
+    let mut depths = vec![];
     for cam in &cameras {
         r.set_camera(ctx, cam.clone());
         r.render(ctx);
         faces.push(r.read_hdr(ctx)?);
+        // Camera-relative positions, w = 0 where nothing was drawn (the sky: far away).
+        let g = r.read_gbuffer(ctx)?;
+        depths.push(
+            g[3].iter()
+                .map(|p| {
+                    if p[3] > 0.0 {
+                        Vec3::new(p[0], p[1], p[2]).length()
+                    } else {
+                        1e4
+                    }
+                })
+                .collect::<Vec<f32>>(),
+        );
     }
     // Lat-long resampling: each direction from the face whose axis it is closest to.
     let (w, h) = (4 * DYNAMIC_FACE, 2 * DYNAMIC_FACE);
     let mut latlong = lightlab_core::image::Image::new(w, h);
+    let mut distance = lightlab_core::image::Image::new(w, h);
     let t = (45f32.to_radians()).tan();
     for y in 0..h {
         for x in 0..w {
@@ -352,8 +387,9 @@ pub fn dynamic(
                 ((ndc.x + 1.0) * 0.5 * DYNAMIC_FACE as f32).clamp(0.0, DYNAMIC_FACE as f32 - 1.0);
             let py =
                 ((1.0 - ndc.y) * 0.5 * DYNAMIC_FACE as f32).clamp(0.0, DYNAMIC_FACE as f32 - 1.0);
-            latlong.data[(y * w + x) as usize] =
-                faces[k].data[(py as u32 * DYNAMIC_FACE + px as u32) as usize];
+            let at = (py as u32 * DYNAMIC_FACE + px as u32) as usize;
+            latlong.data[(y * w + x) as usize] = faces[k].data[at];
+            distance.data[(y * w + x) as usize] = Vec3::splat(depths[k][at]);
         }
     }
     let settings = EnvSettings {
@@ -365,7 +401,16 @@ pub fn dynamic(
         samples: 128,
         irradiance: false,
     };
-    Ok(envmap::prefilter(&latlong, 1.0, &settings).layers)
+    let distances = EnvSettings {
+        roughness: vec![0.0],
+        lobes: vec![Lobe::Ggx],
+        ..settings.clone()
+    };
+    Ok(DynamicMaps {
+        layers: envmap::prefilter(&latlong, 1.0, &settings).layers,
+        distance: envmap::prefilter(&distance, 1.0, &distances).layers,
+        centre,
+    })
 }
 
 /// The maps as one mip-mapped RGBA16F array (a 1×1 pair of layers without maps). Radiance is
@@ -492,7 +537,12 @@ mod tests {
             specular,
             irradiance_layer,
             dynamic_instance,
-            dynamic_base
+            dynamic_base,
+            dyn_distance_base,
+            pad0,
+            pad1,
+            pad2,
+            dyn_centre
         );
         check_struct(src, "EnvUniforms", &layout).unwrap_or_else(|e| panic!("{e}"));
     }

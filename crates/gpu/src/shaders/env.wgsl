@@ -28,6 +28,13 @@ struct EnvUniforms {
     // The instance that reflects the dynamic maps (0xffffffff: none), and their first layer.
     dynamic_instance: u32,
     dynamic_base: u32,
+    // The dynamic maps' distance layers (distance from their centre in red, mirror level).
+    dyn_distance_base: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+    // Their centre; w = 1 when they have distances.
+    dyn_centre: vec4<f32>,
 }
 
 @group(2) @binding(20) var env_maps: texture_2d_array<f32>;
@@ -129,17 +136,20 @@ fn env_lobe(base: u32, lobe_set: u32, roughness: f32, d: vec3<f32>, lod: f32) ->
 // crashes compiling a branch whose condition mixes the two around these texture reads.
 fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) -> vec3<f32> {
     var out = vec3<f32>(0.0);
-    // The dynamic maps' layers for their instance (a layer offset: no branch on it).
-    let base = select(0u, env_u.dynamic_base, instance == env_u.dynamic_instance);
+    // The dynamic maps' layers for their instance (a layer offset: no branch on it), and the
+    // reflected direction corrected for the map's parallax.
+    let dynamic = (instance == env_u.dynamic_instance) & (env_u.dyn_centre.w > 0.0);
+    let base = select(0u, env_u.dynamic_base, dynamic);
+    let rd = select(r, env_parallax(s.p, r), dynamic);
     let nv = dot(s.n, v);
     if env_u.specular != 0u {
         let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (nv > 0.0);
         if glossy {
-            out = env_glossy(s, nv, r, dr, base) * (1.0 - s.delta);
+            out = env_glossy(s, nv, rd, dr, base) * (1.0 - s.delta);
         }
         let glass = (s.delta > 0.0) & (nv > 0.0);
         if glass {
-            out += env_glass(s, v, nv, r, dr, base) * s.delta;
+            out += env_glass(s, v, nv, rd, dr, base) * s.delta;
         }
     }
     return out;
@@ -155,6 +165,21 @@ fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32, base: u32
     let reflected = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
     let refracted = env_lobe(base, env_u.ggx_set, s.roughness, safe_normalize(t, -v), lod);
     return reflected * f + s.tint * refracted * (1.0 - f);
+}
+
+// Distance impostors (Szirmay-Kalos et al. 2005): the direction from the dynamic map's centre
+// c to where the ray p + t·r meets the surroundings, found by three fixed-point steps on the
+// distance map (a map seen from c, looked up as if from p, shows near things misplaced).
+fn env_parallax(p: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
+    let c = env_u.dyn_centre.xyz;
+    var d = r;
+    for (var i = 0u; i < 3u; i++) {
+        let m = normalize(vec3<f32>(dot(env_u.row0.xyz, d), dot(env_u.row1.xyz, d), dot(env_u.row2.xyz, d)));
+        let dist = env_read(env_u.dyn_distance_base, 0u, 0u, m, 0.0).r;
+        let t = max(dot(c + d * dist - p, r), 0.0);
+        d = safe_normalize(p + r * t - c, r);
+    }
+    return d;
 }
 
 // E/π of the irradiance map around world direction n (Heidrich Eq 8.13).
