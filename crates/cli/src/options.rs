@@ -14,7 +14,8 @@ use lightlab_gpu::lights::Attenuation;
 use lightlab_gpu::lpv::{LpvScheme, LpvSettings};
 use lightlab_gpu::prt::ShFilter;
 use lightlab_gpu::raster::{
-    Ambient, EnvDiffuse, EnvMapKind, EnvPrefilter, RasterSettings, RenderPath, ShadowMethod,
+    Ambient, EnvDiffuse, EnvMapKind, EnvPrefilter, RasterSettings, Refraction, RenderPath,
+    ShadowMethod,
 };
 use lightlab_scene::{BrdfModel, Scene};
 use std::path::PathBuf;
@@ -251,6 +252,10 @@ pub struct RasterArgs {
     /// neighbours.
     #[arg(long)]
     pub dynamic_env: bool,
+    /// How glass (KHR_materials_transmission) refracts the environment: one interface, or two
+    /// (in and out through the object's bounding sphere: exact for a ball).
+    #[arg(long, default_value = "two")]
+    pub refraction: Refraction,
     /// Texels of the environment map's finest level over all its faces (the same memory for
     /// every parameterisation; each roughness level holds as many).
     #[arg(long, default_value_t = 2 * 256 * 256)]
@@ -278,6 +283,7 @@ impl Default for RasterArgs {
             env_prefilter: EnvPrefilter::Auto,
             env_diffuse: EnvDiffuse::Sh,
             dynamic_env: false,
+            refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
         }
     }
@@ -325,6 +331,7 @@ impl RasterArgs {
             env_prefilter: self.env_prefilter,
             env_diffuse: self.env_diffuse,
             dynamic_env: self.dynamic_env,
+            refraction: self.refraction,
             env_texels: self.env_texels,
             ..Default::default()
         })

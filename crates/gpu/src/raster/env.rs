@@ -55,7 +55,9 @@ pub struct EnvUniforms {
     pub dynamic_base: u32,
     /// The dynamic maps' distance layers (distance from their centre, in red; mirror level).
     pub dyn_distance_base: u32,
-    pub pad0: u32,
+    /// 1: glass refracts through one interface; 2: through two (the instance's bounding
+    /// sphere).
+    pub refraction: u32,
     pub pad1: u32,
     pub pad2: u32,
     /// The dynamic maps' centre; w = 1 when they have distances.
@@ -69,6 +71,7 @@ pub(super) fn layout_entries() -> Vec<LayoutEntry> {
         sampler(21, wgpu::SamplerBindingType::Filtering),
         filtered_texture(22, Dim::D2),
         buffer(23, wgpu::BufferBindingType::Uniform, false),
+        super::bindings::storage(24),
     ]
 }
 
@@ -78,6 +81,8 @@ pub(super) struct EnvResources {
     sampler: wgpu::Sampler,
     lut: wgpu::TextureView,
     uniforms: wgpu::Buffer,
+    /// Per instance, its bounding sphere (centre, radius): glass's second interface.
+    spheres: wgpu::Buffer,
     /// What the term reflects, for reports: None when it is off.
     pub summary: Option<String>,
 }
@@ -218,6 +223,10 @@ impl EnvResources {
             u.specular = 1;
             u.constant = c.extend(1.0).to_array();
         }
+        u.refraction = match s.refraction {
+            super::Refraction::One => 1,
+            super::Refraction::Two => 2,
+        };
         u.prefilter = match s.env_prefilter {
             EnvPrefilter::Auto => 0,
             EnvPrefilter::Phong => 1,
@@ -252,8 +261,17 @@ impl EnvResources {
             contents: bytemuck::bytes_of(&u),
             usage: wgpu::BufferUsages::UNIFORM,
         });
+        let spheres: Vec<[f32; 4]> = (0..scene.instances.len().max(1))
+            .map(|i| bounding_sphere(scene, i))
+            .collect();
+        let spheres = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("instance spheres"),
+            contents: bytemuck::cast_slice(&spheres),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         EnvResources {
             maps,
+            spheres,
             sampler,
             lut: upload_lut(ctx),
             uniforms,
@@ -267,8 +285,28 @@ impl EnvResources {
             entry(21, R::Sampler(&self.sampler)),
             entry(22, R::TextureView(&self.lut)),
             entry(23, self.uniforms.as_entire_binding()),
+            entry(24, self.spheres.as_entire_binding()),
         ]
     }
+}
+
+/// Instance `i`'s bounding sphere: the centre of its bounds and the farthest vertex from it
+/// (a ball's own sphere); zeros for an empty or missing instance.
+fn bounding_sphere(scene: &Scene, i: usize) -> [f32; 4] {
+    let Some((lo, hi)) = (i < scene.instances.len())
+        .then(|| scene.instance_bounds(i))
+        .flatten()
+    else {
+        return [0.0; 4];
+    };
+    let c = (lo + hi) * 0.5;
+    let inst = &scene.instances[i];
+    let r = scene.meshes[inst.mesh]
+        .positions
+        .iter()
+        .map(|p| inst.transform.transform_point3(*p).distance(c))
+        .fold(0.0f32, f32::max);
+    [c.x, c.y, c.z, r]
 }
 
 /// The instance whose surroundings matter most in its reflection: the smoothest of the
@@ -539,7 +577,7 @@ mod tests {
             dynamic_instance,
             dynamic_base,
             dyn_distance_base,
-            pad0,
+            refraction,
             pad1,
             pad2,
             dyn_centre

@@ -34,7 +34,7 @@ mod targets;
 pub use ambient::{LightmapInput, SourceKind};
 pub use settings::{
     Ambient, BadAmbient, EnvDiffuse, EnvMapKind, EnvPrefilter, FrameTimes, MAX_AREA_LIGHTS,
-    RasterError, RasterSettings, RenderPath, ShadowMethod, projection,
+    RasterError, RasterSettings, Refraction, RenderPath, ShadowMethod, projection,
 };
 
 use crate::GpuContext;

@@ -85,6 +85,21 @@ lightlab_core::named_enum!(EnvPrefilter, "environment prefilter", {
     Ggx => "ggx",
 });
 
+/// How glass refracts the environment (Heidrich §8.3.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refraction {
+    /// One interface: the refracted direction is looked up as it enters.
+    One,
+    /// Two interfaces: the ray refracts in, crosses the object's bounding sphere and refracts
+    /// out (exact for a ball; an approximation for other solids).
+    Two,
+}
+
+lightlab_core::named_enum!(Refraction, "refraction", {
+    One => "one",
+    Two => "two",
+});
+
 /// The diffuse part of the environment light in the Phong techniques' ambient term.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EnvDiffuse {
@@ -186,6 +201,7 @@ pub struct RasterSettings {
     /// Dynamic environment maps: the scene rendered into a cube at the centre of its most
     /// mirror-like object, which then reflects its neighbours (`raster::env::dynamic`).
     pub dynamic_env: bool,
+    pub refraction: Refraction,
     /// Texels of the environment map's level 0 over all faces (equal memory across
     /// parameterisations).
     pub env_texels: u32,
@@ -219,6 +235,7 @@ impl Default for RasterSettings {
             env_prefilter: EnvPrefilter::Auto,
             env_diffuse: EnvDiffuse::Sh,
             dynamic_env: false,
+            refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
         }
     }

@@ -30,7 +30,8 @@ struct EnvUniforms {
     dynamic_base: u32,
     // The dynamic maps' distance layers (distance from their centre in red, mirror level).
     dyn_distance_base: u32,
-    pad0: u32,
+    // 1: glass refracts through one interface; 2: through two (the instance's bounding sphere).
+    refraction: u32,
     pad1: u32,
     pad2: u32,
     // Their centre; w = 1 when they have distances.
@@ -41,6 +42,8 @@ struct EnvUniforms {
 @group(2) @binding(21) var env_sampler: sampler;
 @group(2) @binding(22) var env_lut: texture_2d<f32>;
 @group(2) @binding(23) var<uniform> env_u: EnvUniforms;
+// Per scene instance, its bounding sphere (centre, radius).
+@group(2) @binding(24) var<storage, read> env_spheres: array<vec4<f32>>;
 
 // (face, u, v) of map direction m, as lightlab_core::param::Param::dir_to_uv.
 fn env_face_uv(m: vec3<f32>) -> vec3<f32> {
@@ -149,7 +152,7 @@ fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) 
         }
         let glass = (s.delta > 0.0) & (nv > 0.0);
         if glass {
-            out += env_glass(s, v, nv, rd, dr, base) * s.delta;
+            out += env_glass(s, v, nv, rd, dr, base, instance) * s.delta;
         }
     }
     return out;
@@ -158,10 +161,13 @@ fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) 
 // The smooth dielectric interface (Heidrich §8.3.1, §8.3.3 with one interface): Fresnel-
 // weighted mirror reflection plus the refracted direction looked up in the same maps, tinted
 // by the base colour. One interface: the ray is not followed out of the object again.
-fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32, base: u32) -> vec3<f32> {
+fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32, base: u32, instance: u32) -> vec3<f32> {
     let lod = clamp(log2(max(dr, 1e-8) / max(env_u.texel_angle, 1e-8)), 0.0, max(env_u.mips - 1.0, 0.0));
     let f = fresnel_dielectric(nv, s.ior);
-    let t = refract(-v, s.n, 1.0 / s.ior);
+    var t = refract(-v, s.n, 1.0 / s.ior);
+    if env_u.refraction == 2u {
+        t = env_exit(s, t, instance);
+    }
     let reflected = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
     let refracted = env_lobe(base, env_u.ggx_set, s.roughness, safe_normalize(t, -v), lod);
     return reflected * f + s.tint * refracted * (1.0 - f);
@@ -180,6 +186,24 @@ fn env_parallax(p: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
         d = safe_normalize(p + r * t - c, r);
     }
     return d;
+}
+
+// The second interface (Heidrich §8.3.3, two interfaces): the refracted ray t crosses the
+// instance's bounding sphere from s.p and refracts out there (total internal reflection:
+// reflected back in, and taken as leaving, a single bounce being all this follows).
+fn env_exit(s: Surface, t: vec3<f32>, instance: u32) -> vec3<f32> {
+    let sphere = env_spheres[instance];
+    let c = sphere.xyz;
+    let rr = sphere.w;
+    // The far intersection of p + k·t with the sphere (p lies on or inside it).
+    let q = s.p - c;
+    let b = dot(q, t);
+    let disc = max(b * b - (dot(q, q) - rr * rr), 0.0);
+    let k = -b + sqrt(disc);
+    let n2 = safe_normalize(q + t * k, -t);
+    let out = refract(t, -n2, s.ior);
+    let tir = dot(out, out) < 1e-6;
+    return select(safe_normalize(out, t), reflect(t, -n2), tir);
 }
 
 // E/π of the irradiance map around world direction n (Heidrich Eq 8.13).
