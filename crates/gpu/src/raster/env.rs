@@ -314,7 +314,8 @@ fn bounding_sphere(scene: &Scene, i: usize) -> [f32; 4] {
 pub fn dynamic_instance(scene: &Scene) -> Option<usize> {
     let score = |i: usize| {
         let m = &scene.materials[scene.meshes[scene.instances[i].mesh].material];
-        let mirror = m.metallic.max(m.specular_transmission);
+        // Metal mirrors first: glass shows more of what is behind it than what is around it.
+        let mirror = m.metallic.max(0.9 * m.specular_transmission);
         (mirror >= 0.5 && m.roughness < 0.3).then_some(m.roughness - mirror)
     };
     (0..scene.instances.len())

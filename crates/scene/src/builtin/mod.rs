@@ -799,6 +799,39 @@ fn spheres() -> Scene {
             Mat4::from_translation(Vec3::new(-1.65 + 1.1 * i as f32, 0.45, -0.3)),
         );
     }
+    // Behind the row: clear glass (KHR_materials_transmission) and a chrome mirror, which
+    // reflects its neighbours (Heidrich ch. 8; `--dynamic-env` on the GPU).
+    for (name, m, x) in [
+        (
+            "glass",
+            Material {
+                name: "glass_clear".into(),
+                base_color: Vec4::ONE,
+                roughness: 0.0,
+                specular_transmission: 1.0,
+                ior: 1.5,
+                ..Default::default()
+            },
+            -1.1,
+        ),
+        (
+            "mirror",
+            Material {
+                name: "chrome_mirror".into(),
+                base_color: Vec4::new(0.9, 0.9, 0.92, 1.0),
+                metallic: 1.0,
+                roughness: 0.0,
+                ..Default::default()
+            },
+            1.1,
+        ),
+    ] {
+        let id = s.add_material(m);
+        s.add_mesh(
+            sphere(&format!("sphere_{name}"), 0.45, 64, 32, id),
+            Mat4::from_translation(Vec3::new(x, 0.45, -1.5)),
+        );
+    }
     let green = s.add_material(Material {
         name: "plastic_green".into(),
         base_color: Vec4::new(0.15, 0.5, 0.15, 1.0),
