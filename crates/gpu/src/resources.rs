@@ -61,10 +61,24 @@ pub fn write_layer(
     bytes_per_row: u32,
     size: [u32; 2],
 ) {
+    write_mip(ctx, tex, layer, 0, data, bytes_per_row, size);
+}
+
+/// Write `data` (rows of `bytes_per_row` bytes) into the top-left `size` of mip level `mip` of
+/// layer `layer`.
+pub fn write_mip(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    layer: u32,
+    mip: u32,
+    data: &[u8],
+    bytes_per_row: u32,
+    size: [u32; 2],
+) {
     ctx.queue.write_texture(
         wgpu::TexelCopyTextureInfo {
             texture: tex,
-            mip_level: 0,
+            mip_level: mip,
             origin: wgpu::Origin3d {
                 x: 0,
                 y: 0,

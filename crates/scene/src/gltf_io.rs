@@ -978,6 +978,112 @@ fn read_vectors(
     }
 }
 
+/// A texture reference as glTF textureInfo (with its KHR_texture_transform).
+fn texture_info(r: &TextureRef) -> Value {
+    let mut v = json!({ "index": r.texture, "texCoord": r.uv_set });
+    if !r.transform.is_identity() {
+        let (offset, rotation, scale) = r.transform.decompose();
+        v["extensions"] = json!({ "KHR_texture_transform": {
+            "offset": offset.to_array(), "rotation": rotation, "scale": scale.to_array()
+        }});
+    }
+    v
+}
+
+fn use_ext_in(used: &mut Vec<&'static str>, e: &'static str) {
+    if !used.contains(&e) {
+        used.push(e);
+    }
+}
+
+/// One material as glTF JSON; the extensions it uses are added to `used`.
+fn material_json(m: &Material, used: &mut Vec<&'static str>) -> Value {
+    let mut pbr = json!({
+        "baseColorFactor": m.base_color.to_array(),
+        "metallicFactor": m.metallic,
+        "roughnessFactor": m.roughness,
+    });
+    if let Some(r) = &m.base_color_texture {
+        pbr["baseColorTexture"] = texture_info(r);
+    }
+    if let Some(r) = &m.metallic_roughness_texture {
+        pbr["metallicRoughnessTexture"] = texture_info(r);
+    }
+    let mut v =
+        json!({ "name": m.name, "pbrMetallicRoughness": pbr, "doubleSided": m.double_sided });
+    // glTF requires emissiveFactor ≤ 1: fold any excess into emissive_strength.
+    let peak = m.emissive.max_element();
+    let (factor, strength) = if peak > 1.0 {
+        (m.emissive / peak, m.emissive_strength * peak)
+    } else {
+        (m.emissive, m.emissive_strength)
+    };
+    v["emissiveFactor"] = json!(factor.to_array());
+    if let Some(r) = &m.emissive_texture {
+        v["emissiveTexture"] = texture_info(r);
+    }
+    if let Some(r) = &m.normal_texture {
+        v["normalTexture"] = texture_info(r);
+        v["normalTexture"]["scale"] = json!(m.normal_scale);
+    }
+    match m.alpha_mode {
+        AlphaMode::Opaque => {}
+        AlphaMode::Mask { cutoff } => {
+            v["alphaMode"] = json!("MASK");
+            v["alphaCutoff"] = json!(cutoff);
+        }
+        AlphaMode::Blend => v["alphaMode"] = json!("BLEND"),
+    }
+    let mut exts = serde_json::Map::new();
+    if strength != 1.0 {
+        use_ext_in(used, "KHR_materials_emissive_strength");
+        exts.insert(
+            "KHR_materials_emissive_strength".into(),
+            json!({ "emissiveStrength": strength }),
+        );
+    }
+    if m.specular != 1.0 {
+        use_ext_in(used, "KHR_materials_specular");
+        exts.insert(
+            "KHR_materials_specular".into(),
+            json!({ "specularFactor": m.specular }),
+        );
+    }
+    if m.specular_transmission != 0.0 {
+        use_ext_in(used, "KHR_materials_transmission");
+        exts.insert(
+            "KHR_materials_transmission".into(),
+            json!({ "transmissionFactor": m.specular_transmission }),
+        );
+    }
+    if m.ior != 1.5 {
+        use_ext_in(used, "KHR_materials_ior");
+        exts.insert("KHR_materials_ior".into(), json!({ "ior": m.ior }));
+    }
+    if m.transmission != 0.0 {
+        use_ext_in(used, "KHR_materials_diffuse_transmission");
+        let mut dt = json!({ "diffuseTransmissionFactor": m.transmission });
+        if let Some(r) = &m.transmission_texture {
+            dt["diffuseTransmissionTexture"] = texture_info(r);
+        }
+        exts.insert("KHR_materials_diffuse_transmission".into(), dt);
+    }
+    if !exts.is_empty() {
+        v["extensions"] = Value::Object(exts);
+    }
+    let mut extras = serde_json::Map::new();
+    if m.brdf != BrdfModel::Pbr {
+        extras.insert("brdf".into(), json!(m.brdf.name()));
+    }
+    if m.sway != 0.0 {
+        extras.insert("sway".into(), json!(m.sway));
+    }
+    if !extras.is_empty() {
+        v["extras"] = json!({ "lightlab": extras });
+    }
+    v
+}
+
 /// A texture as PNG: 8- and 16-bit texels as stored (an import–export round trip keeps them
 /// exactly), float texels encoded to 8 bits (sRGB-encoded for colour textures).
 fn texture_png(t: &Texture) -> Result<Vec<u8>, image::ImageError> {
@@ -1212,16 +1318,6 @@ impl Writer {
         let textures: Vec<Value> = (0..images.len())
             .map(|i| json!({ "source": i, "sampler": usize::from(i >= scene.textures.len()) }))
             .collect();
-        let tinfo = |r: &TextureRef| {
-            let mut v = json!({ "index": r.texture, "texCoord": r.uv_set });
-            if !r.transform.is_identity() {
-                let (offset, rotation, scale) = r.transform.decompose();
-                v["extensions"] = json!({ "KHR_texture_transform": {
-                    "offset": offset.to_array(), "rotation": rotation, "scale": scale.to_array()
-                }});
-            }
-            v
-        };
         if scene
             .materials
             .iter()
@@ -1230,92 +1326,11 @@ impl Writer {
         {
             use_ext("KHR_texture_transform", &mut used);
         }
-        let mut materials = vec![];
-        for m in &scene.materials {
-            let mut pbr = json!({
-                "baseColorFactor": m.base_color.to_array(),
-                "metallicFactor": m.metallic,
-                "roughnessFactor": m.roughness,
-            });
-            if let Some(r) = &m.base_color_texture {
-                pbr["baseColorTexture"] = tinfo(r);
-            }
-            if let Some(r) = &m.metallic_roughness_texture {
-                pbr["metallicRoughnessTexture"] = tinfo(r);
-            }
-            let mut v = json!({ "name": m.name, "pbrMetallicRoughness": pbr, "doubleSided": m.double_sided });
-            // glTF requires emissiveFactor ≤ 1: fold any excess into emissive_strength.
-            let peak = m.emissive.max_element();
-            let (factor, strength) = if peak > 1.0 {
-                (m.emissive / peak, m.emissive_strength * peak)
-            } else {
-                (m.emissive, m.emissive_strength)
-            };
-            v["emissiveFactor"] = json!(factor.to_array());
-            if let Some(r) = &m.emissive_texture {
-                v["emissiveTexture"] = tinfo(r);
-            }
-            if let Some(r) = &m.normal_texture {
-                v["normalTexture"] = tinfo(r);
-                v["normalTexture"]["scale"] = json!(m.normal_scale);
-            }
-            match m.alpha_mode {
-                AlphaMode::Opaque => {}
-                AlphaMode::Mask { cutoff } => {
-                    v["alphaMode"] = json!("MASK");
-                    v["alphaCutoff"] = json!(cutoff);
-                }
-                AlphaMode::Blend => v["alphaMode"] = json!("BLEND"),
-            }
-            let mut exts = serde_json::Map::new();
-            if strength != 1.0 {
-                use_ext("KHR_materials_emissive_strength", &mut used);
-                exts.insert(
-                    "KHR_materials_emissive_strength".into(),
-                    json!({ "emissiveStrength": strength }),
-                );
-            }
-            if m.specular != 1.0 {
-                use_ext("KHR_materials_specular", &mut used);
-                exts.insert(
-                    "KHR_materials_specular".into(),
-                    json!({ "specularFactor": m.specular }),
-                );
-            }
-            if m.specular_transmission != 0.0 {
-                use_ext("KHR_materials_transmission", &mut used);
-                exts.insert(
-                    "KHR_materials_transmission".into(),
-                    json!({ "transmissionFactor": m.specular_transmission }),
-                );
-            }
-            if m.ior != 1.5 {
-                use_ext("KHR_materials_ior", &mut used);
-                exts.insert("KHR_materials_ior".into(), json!({ "ior": m.ior }));
-            }
-            if m.transmission != 0.0 {
-                use_ext("KHR_materials_diffuse_transmission", &mut used);
-                let mut dt = json!({ "diffuseTransmissionFactor": m.transmission });
-                if let Some(r) = &m.transmission_texture {
-                    dt["diffuseTransmissionTexture"] = tinfo(r);
-                }
-                exts.insert("KHR_materials_diffuse_transmission".into(), dt);
-            }
-            if !exts.is_empty() {
-                v["extensions"] = Value::Object(exts);
-            }
-            let mut extras = serde_json::Map::new();
-            if m.brdf != BrdfModel::Pbr {
-                extras.insert("brdf".into(), json!(m.brdf.name()));
-            }
-            if m.sway != 0.0 {
-                extras.insert("sway".into(), json!(m.sway));
-            }
-            if !extras.is_empty() {
-                v["extras"] = json!({ "lightlab": extras });
-            }
-            materials.push(v);
-        }
+        let materials: Vec<Value> = scene
+            .materials
+            .iter()
+            .map(|m| material_json(m, &mut used))
+            .collect();
         let mut meshes = vec![];
         for m in &scene.meshes {
             let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();

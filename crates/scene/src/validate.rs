@@ -32,50 +32,8 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         what,
         problem,
     };
+    check_materials(scene, path)?;
     let nmat = scene.materials.len();
-    let ntex = scene.textures.len();
-    for t in &scene.textures {
-        if t.width == 0 || t.height == 0 || t.texels.len() != t.width as usize * t.height as usize {
-            return Err(content(
-                format!("texture '{}'", t.name),
-                format!("zero-sized or inconsistent ({}×{})", t.width, t.height),
-            ));
-        }
-    }
-    for m in &scene.materials {
-        if let Some(r) = m.texture_refs().find(|r| r.uv_set > 1) {
-            return Err(content(
-                format!("material '{}'", m.name),
-                format!(
-                    "a texture reads TEXCOORD_{}; lightlab reads TEXCOORD_0 and TEXCOORD_1",
-                    r.uv_set
-                ),
-            ));
-        }
-        if m.texture_refs().any(|r| r.texture >= ntex) {
-            return Err(content(
-                format!("material '{}'", m.name),
-                "references a texture that does not exist".into(),
-            ));
-        }
-        let scalars = [
-            m.metallic,
-            m.roughness,
-            m.specular,
-            m.emissive_strength,
-            m.transmission,
-            m.sway,
-        ];
-        if !m.base_color.is_finite()
-            || !m.emissive.is_finite()
-            || scalars.iter().any(|v| !v.is_finite())
-        {
-            return Err(content(
-                format!("material '{}'", m.name),
-                "has NaN or infinite parameters".into(),
-            ));
-        }
-    }
     let nmesh = scene.meshes.len();
     for (k, mesh) in scene.meshes.iter_mut().enumerate() {
         let n = mesh.positions.len();
@@ -142,18 +100,6 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
             return Err(geo(
                 &name,
                 "TEXCOORD_1 is inconsistent or not finite".into(),
-            ));
-        }
-        if let Some(set) = scene.materials[mesh.material]
-            .texture_refs()
-            .map(|r| r.uv_set)
-            .find(|&s| s > 1)
-        {
-            return Err(geo(
-                &name,
-                format!(
-                    "a texture of its material reads TEXCOORD_{set}; lightlab reads sets 0 and 1"
-                ),
             ));
         }
         if !mesh.colors.is_empty()
@@ -236,6 +182,62 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
             "scene".into(),
             "contains no triangle meshes".into(),
         ));
+    }
+    Ok(())
+}
+
+/// Textures of consistent size; materials whose textures exist, read set 0 or 1, and whose
+/// parameters are finite.
+fn check_materials(scene: &Scene, path: &Path) -> Result<(), SceneError> {
+    let content = |what: String, problem: String| SceneError::Content {
+        path: path.into(),
+        what,
+        problem,
+    };
+    let ntex = scene.textures.len();
+    for t in &scene.textures {
+        if t.width == 0 || t.height == 0 || t.texels.len() != t.width as usize * t.height as usize {
+            return Err(content(
+                format!("texture '{}'", t.name),
+                format!("zero-sized or inconsistent ({}×{})", t.width, t.height),
+            ));
+        }
+    }
+    for m in &scene.materials {
+        if let Some(r) = m.texture_refs().find(|r| r.uv_set > 1) {
+            return Err(content(
+                format!("material '{}'", m.name),
+                format!(
+                    "a texture reads TEXCOORD_{}; lightlab reads TEXCOORD_0 and TEXCOORD_1",
+                    r.uv_set
+                ),
+            ));
+        }
+        if m.texture_refs().any(|r| r.texture >= ntex) {
+            return Err(content(
+                format!("material '{}'", m.name),
+                "references a texture that does not exist".into(),
+            ));
+        }
+        let scalars = [
+            m.metallic,
+            m.roughness,
+            m.specular,
+            m.emissive_strength,
+            m.transmission,
+            m.sway,
+            m.specular_transmission,
+            m.ior,
+        ];
+        if !m.base_color.is_finite()
+            || !m.emissive.is_finite()
+            || scalars.iter().any(|v| !v.is_finite())
+        {
+            return Err(content(
+                format!("material '{}'", m.name),
+                "has NaN or infinite parameters".into(),
+            ));
+        }
     }
     Ok(())
 }

@@ -485,13 +485,14 @@ fn upload_maps(ctx: &GpuContext, maps: Option<&EnvMaps>) -> wgpu::TextureView {
                         [c.x, c.y, c.z, 1.0].map(half::f16::from_f32)
                     })
                     .collect();
-                write_mip(
+                crate::resources::write_mip(
                     ctx,
                     &tex,
                     layer as u32,
                     mip as u32,
-                    n,
                     bytemuck::cast_slice(&data),
+                    n * 8,
+                    [n, n],
                 );
             }
         }
@@ -500,32 +501,6 @@ fn upload_maps(ctx: &GpuContext, maps: Option<&EnvMaps>) -> wgpu::TextureView {
         dimension: Some(Dim::D2Array),
         ..Default::default()
     })
-}
-
-fn write_mip(ctx: &GpuContext, tex: &wgpu::Texture, layer: u32, mip: u32, n: u32, data: &[u8]) {
-    ctx.queue.write_texture(
-        wgpu::TexelCopyTextureInfo {
-            texture: tex,
-            mip_level: mip,
-            origin: wgpu::Origin3d {
-                x: 0,
-                y: 0,
-                z: layer,
-            },
-            aspect: wgpu::TextureAspect::All,
-        },
-        data,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(n * 8),
-            rows_per_image: Some(n),
-        },
-        wgpu::Extent3d {
-            width: n,
-            height: n,
-            depth_or_array_layers: 1,
-        },
-    );
 }
 
 /// The split-sum table (A, B in red and green), computed once per process.
@@ -545,7 +520,14 @@ fn upload_lut(ctx: &GpuContext) -> wgpu::TextureView {
         wgpu::TextureFormat::Rgba16Float,
         wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     );
-    write_mip(ctx, &tex, 0, 0, LUT_SIZE, bytemuck::cast_slice(&data));
+    crate::resources::write_layer(
+        ctx,
+        &tex,
+        0,
+        bytemuck::cast_slice(&data),
+        LUT_SIZE * 8,
+        [LUT_SIZE, LUT_SIZE],
+    );
     tex.create_view(&Default::default())
 }
 
