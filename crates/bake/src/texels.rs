@@ -274,7 +274,8 @@ pub fn normal_mapped_normal(
 }
 
 /// Diffuse reflectance of a material at a surface point: (1−metallic)·base colour (× vertex
-/// colour × textures).
+/// colour × textures), less the glass part of a transmissive material (its diffuse layer is
+/// 1 − t of it, as in the path tracer's BSDF).
 pub fn albedo(scene: &Scene, material: usize, uv: lightlab_scene::Attrs) -> Vec3 {
     let m = &scene.materials[material];
     let mut base = m.base_color * uv.color;
@@ -285,7 +286,12 @@ pub fn albedo(scene: &Scene, material: usize, uv: lightlab_scene::Attrs) -> Vec3
     if let Some(r) = m.metallic_roughness_texture {
         metallic *= scene.sample(r, uv).z;
     }
-    base.truncate() * (1.0 - metallic)
+    let glass = if m.brdf == lightlab_scene::BrdfModel::Pbr {
+        m.specular_transmission * (1.0 - metallic)
+    } else {
+        0.0
+    };
+    base.truncate() * (1.0 - metallic) * (1.0 - glass)
 }
 
 /// Mark texels whose sample point sees back faces (it lies inside or under geometry, as where a
