@@ -95,7 +95,7 @@ fn env_face_uv(m: vec3<f32>) -> vec3<f32> {
 }
 
 fn env_level_roughness(i: u32) -> f32 {
-    // Components picked by select: llvmpipe crashes on a dynamic component index.
+    // Component i % 4 of vector i / 4.
     let v = env_u.roughness[i / 4u];
     let k = i % 4u;
     return select(select(select(v.w, v.z, k == 2u), v.y, k == 1u), v.x, k == 0u);
@@ -135,7 +135,7 @@ fn env_lobe(base: u32, lobe_set: u32, roughness: f32, d: vec3<f32>, lod: f32) ->
 // The environment reflected by the specular lobe of `s` towards v (unit, to the viewer): GGX
 // with the split-sum table, or Heidrich's Phong prefilter (f0·⟨n,r⟩·map). `dr` is the
 // reflected direction's change across a pixel (radians), which picks the minification level.
-// The uniform test stays apart from the per-fragment one: llvmpipe (Mesa 22.3, LLVM 15)
+// The uniform test stays apart from the per-fragment one: lavapipe (Debian 12, LLVM 15)
 // crashes compiling a branch whose condition mixes the two around these texture reads.
 fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) -> vec3<f32> {
     var out = vec3<f32>(0.0);
