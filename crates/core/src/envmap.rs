@@ -406,6 +406,34 @@ pub fn prefilter(img: &Image, scale: f32, settings: &EnvSettings) -> EnvMaps {
 }
 
 impl EnvMaps {
+    /// The maps of a black environment in `settings`' layout (what dynamic maps sit beside
+    /// when a scene has no environment).
+    pub fn black(settings: &EnvSettings) -> EnvMaps {
+        let size = settings.size.max(1);
+        let faces = settings.param.faces();
+        let count = settings.lobes.len() * settings.roughness.len() * faces
+            + if settings.irradiance { faces } else { 0 };
+        let mut chain = vec![];
+        let mut n = size;
+        loop {
+            chain.push(vec![Vec3::ZERO; (n * n) as usize]);
+            if n == 1 {
+                break;
+            }
+            n /= 2;
+        }
+        EnvMaps {
+            param: settings.param,
+            frame: settings.frame,
+            size,
+            roughness: settings.roughness.clone(),
+            lobes: settings.lobes.clone(),
+            irradiance: settings.irradiance,
+            layers: vec![chain; count],
+            texel_angle: (4.0 * PI / (faces as f32 * (size * size) as f32)).sqrt(),
+        }
+    }
+
     pub fn faces(&self) -> usize {
         self.param.faces()
     }

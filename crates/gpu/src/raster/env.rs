@@ -141,6 +141,13 @@ pub fn prefiltered(scene: &Scene, s: &RasterSettings, camera: &Camera) -> Option
     if s.ambient != Ambient::Environment {
         return None;
     }
+    let settings = env_settings(scene, s, camera)?;
+    Some(envmap::prefilter(&env.image, env.intensity, &settings))
+}
+
+/// The maps' parameterisation, frame, size, levels and lobes for `s`; None when nothing needs
+/// them.
+fn env_settings(scene: &Scene, s: &RasterSettings, camera: &Camera) -> Option<EnvSettings> {
     let irradiance = s.env_diffuse == EnvDiffuse::Map;
     let lobes = match s.env_map {
         EnvMapKind::None => vec![],
@@ -164,7 +171,7 @@ pub fn prefiltered(scene: &Scene, s: &RasterSettings, camera: &Camera) -> Option
         samples: 128,
         irradiance,
     };
-    Some(envmap::prefilter(&env.image, env.intensity, &settings))
+    Some(settings)
 }
 
 impl EnvResources {
@@ -180,6 +187,11 @@ impl EnvResources {
         } else {
             None
         };
+        // Dynamic maps in a scene without an environment: beside black static maps.
+        if maps.is_none() && enabled && s.dynamic_env && !matches!(s.ambient, Ambient::Constant(_))
+        {
+            maps = env_settings(scene, s, camera).map(|e| EnvMaps::black(&e));
+        }
         let mut u = EnvUniforms::zeroed();
         u.irradiance_layer = u32::MAX;
         u.dynamic_instance = u32::MAX;
