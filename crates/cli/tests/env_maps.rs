@@ -272,31 +272,9 @@ fn fresnel_weighted_reflections_follow_the_index_of_refraction() {
 /// radii off its surface: a map projected from the centre misplaces what is nearer (parallax).
 #[test]
 fn dynamic_maps_reflect_the_neighbours() {
-    use lightlab_scene::builtin::geom;
     let tmp = tempfile::tempdir().unwrap();
     let p = |n: &str| tmp.path().join(n);
-    let mut scene = ball(0.0, BrdfModel::Pbr);
-    scene.materials[0].base_color = Vec4::new(0.9, 0.9, 0.9, 1.0);
-    let red = scene.add_material(Material::diffuse("red", Vec3::new(0.8, 0.05, 0.05)));
-    let grey = scene.add_material(Material::diffuse("grey", Vec3::splat(0.5)));
-    scene.add_mesh(
-        geom::aabb_box(
-            "box",
-            Vec3::new(2.5, -1.6, -1.5),
-            Vec3::new(3.7, 1.2, 0.5),
-            red,
-        ),
-        Mat4::IDENTITY,
-    );
-    scene.add_mesh(
-        geom::aabb_box(
-            "floor",
-            Vec3::new(-6.0, -1.8, -6.0),
-            Vec3::new(6.0, -1.6, 6.0),
-            grey,
-        ),
-        Mat4::IDENTITY,
-    );
+    let scene = ball_box_floor();
     let glb = p("dyn.glb");
     lightlab_scene::gltf_io::export(&scene, &glb).unwrap();
     let reference = p("ref.exr");
@@ -353,32 +331,11 @@ fn dynamic_maps_reflect_the_neighbours() {
 /// and floor (black without them).
 #[test]
 fn dynamic_maps_work_without_an_environment() {
-    use lightlab_scene::builtin::geom;
     use lightlab_scene::{Light, LightKind};
     let tmp = tempfile::tempdir().unwrap();
     let p = |n: &str| tmp.path().join(n);
-    let mut scene = ball(0.0, BrdfModel::Pbr);
+    let mut scene = ball_box_floor();
     scene.environment = None;
-    let red = scene.add_material(Material::diffuse("red", Vec3::new(0.8, 0.05, 0.05)));
-    let grey = scene.add_material(Material::diffuse("grey", Vec3::splat(0.5)));
-    scene.add_mesh(
-        geom::aabb_box(
-            "box",
-            Vec3::new(2.5, -1.6, -1.5),
-            Vec3::new(3.7, 1.2, 0.5),
-            red,
-        ),
-        Mat4::IDENTITY,
-    );
-    scene.add_mesh(
-        geom::aabb_box(
-            "floor",
-            Vec3::new(-6.0, -1.8, -6.0),
-            Vec3::new(6.0, -1.6, 6.0),
-            grey,
-        ),
-        Mat4::IDENTITY,
-    );
     scene.lights.push(Light {
         name: "sun".into(),
         kind: LightKind::Directional {
@@ -408,4 +365,32 @@ fn dynamic_maps_work_without_an_environment() {
     );
     eprintln!("chrome ball under a sun, no environment: relMSE static {es:.4}, dynamic {ed:.4}");
     assert!(ed < 0.5 * es, "the dynamic map does not help: {ed} vs {es}");
+}
+
+/// A chrome ball 0.6 radii over a grey floor, beside a red box 1.5 radii off its surface.
+fn ball_box_floor() -> Scene {
+    use lightlab_scene::builtin::geom;
+    let mut scene = ball(0.0, BrdfModel::Pbr);
+    scene.materials[0].base_color = Vec4::new(0.9, 0.9, 0.9, 1.0);
+    let red = scene.add_material(Material::diffuse("red", Vec3::new(0.8, 0.05, 0.05)));
+    let grey = scene.add_material(Material::diffuse("grey", Vec3::splat(0.5)));
+    scene.add_mesh(
+        geom::aabb_box(
+            "box",
+            Vec3::new(2.5, -1.6, -1.5),
+            Vec3::new(3.7, 1.2, 0.5),
+            red,
+        ),
+        Mat4::IDENTITY,
+    );
+    scene.add_mesh(
+        geom::aabb_box(
+            "floor",
+            Vec3::new(-6.0, -1.8, -6.0),
+            Vec3::new(6.0, -1.6, 6.0),
+            grey,
+        ),
+        Mat4::IDENTITY,
+    );
+    scene
 }

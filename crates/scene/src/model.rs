@@ -302,8 +302,7 @@ lightlab_core::named_enum!(BrdfModel, "BRDF model", {
 impl BrdfModel {
     /// The Phong/Blinn-Phong exponent of a roughness (clamped to [1, 10⁴]).
     pub fn exponent(roughness: f32) -> f32 {
-        let a2 = (roughness * roughness).powi(2).max(1e-6);
-        (2.0 / a2 - 2.0).clamp(1.0, 1e4)
+        lightlab_core::envmap::phong_exponent(roughness)
     }
 }
 
