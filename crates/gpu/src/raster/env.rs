@@ -193,7 +193,11 @@ impl EnvResources {
             maps = env_settings(scene, s, camera).map(|e| EnvMaps::black(&e));
         }
         let mut u = EnvUniforms::zeroed();
-        u.irradiance_layer = u32::MAX;
+        // The irradiance map ends the static layers (the dynamic ones follow them).
+        u.irradiance_layer = maps
+            .as_ref()
+            .filter(|m| m.irradiance)
+            .map_or(u32::MAX, |m| (m.layers.len() - m.faces()) as u32);
         u.dynamic_instance = u32::MAX;
         if let (Some(m), true) = (maps.as_mut(), s.dynamic_env)
             && let Some(i) = dynamic_instance(scene)
@@ -219,9 +223,6 @@ impl EnvResources {
                 [rows.x_axis, rows.y_axis, rows.z_axis].map(|r| r.extend(0.0).to_array());
             u.mode = param_of(s.env_map).map_or(1, |p| p.1);
             u.specular = u32::from(!m.lobes.is_empty());
-            if m.irradiance {
-                u.irradiance_layer = (m.layers.len() - m.faces()) as u32;
-            }
             u.levels = m.roughness.len() as u32;
             u.phong_set = m.lobes.iter().position(|l| *l == Lobe::Phong).unwrap_or(0) as u32;
             u.ggx_set = m.lobes.iter().position(|l| *l == Lobe::Ggx).unwrap_or(0) as u32;
