@@ -427,36 +427,19 @@ pub fn unwrap_scene(scene: &mut Scene, settings: &LayoutSettings) -> Result<Layo
 
 /// Rebuild a mesh from the unwrap's output vertices (`xref` = source vertex).
 fn remap_mesh(mesh: &mut Mesh, out: &uvunwrap::OutputMesh) {
-    let pick = |v: &[Vec3]| -> Vec<Vec3> {
+    // Per-vertex attributes follow their source vertex; absent ones stay absent.
+    fn pick<T: Copy>(v: &[T], out: &uvunwrap::OutputMesh) -> Vec<T> {
         if v.is_empty() {
             vec![]
         } else {
             out.vertices.iter().map(|o| v[o.xref as usize]).collect()
         }
-    };
-    mesh.positions = pick(&mesh.positions);
-    mesh.normals = pick(&mesh.normals);
-    if !mesh.tangents.is_empty() {
-        mesh.tangents = out
-            .vertices
-            .iter()
-            .map(|o| mesh.tangents[o.xref as usize])
-            .collect();
     }
-    if !mesh.uv0.is_empty() {
-        mesh.uv0 = out
-            .vertices
-            .iter()
-            .map(|o| mesh.uv0[o.xref as usize])
-            .collect();
-    }
-    if !mesh.colors.is_empty() {
-        mesh.colors = out
-            .vertices
-            .iter()
-            .map(|o| mesh.colors[o.xref as usize])
-            .collect();
-    }
+    mesh.positions = pick(&mesh.positions, out);
+    mesh.normals = pick(&mesh.normals, out);
+    mesh.tangents = pick(&mesh.tangents, out);
+    mesh.uv0 = pick(&mesh.uv0, out);
+    mesh.colors = pick(&mesh.colors, out);
     mesh.uv1 = Some(out.vertices.iter().map(|o| Vec2::from(o.uv)).collect());
     mesh.indices = out.indices.clone();
 }

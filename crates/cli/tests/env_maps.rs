@@ -280,17 +280,7 @@ fn dynamic_maps_reflect_the_neighbours() {
     let reference = p("ref.exr");
     render(&glb, "reference", &["--spp", "256"], &reference);
     let (stat, dynamic) = (p("static.exr"), p("dynamic.exr"));
-    render(&glb, "phong-shadow-maps", &["--ssaa", "2"], &stat);
-    render(
-        &glb,
-        "phong-shadow-maps",
-        &["--ssaa", "2", "--dynamic-env"],
-        &dynamic,
-    );
-    let (es, ed) = (
-        sphere_relmse(&scene, &stat, &reference),
-        sphere_relmse(&scene, &dynamic, &reference),
-    );
+    let (es, ed) = static_and_dynamic(&scene, &glb, &reference, &stat, &dynamic);
     // Redness of the ball's pixels: the box is seen in it.
     let red_share = |f: &Path| {
         let img = Image::read(f).unwrap();
@@ -352,17 +342,7 @@ fn dynamic_maps_work_without_an_environment() {
     let reference = p("ref.exr");
     render(&glb, "reference", &["--spp", "128"], &reference);
     let (stat, dynamic) = (p("static.exr"), p("dynamic.exr"));
-    render(&glb, "phong-shadow-maps", &["--ssaa", "2"], &stat);
-    render(
-        &glb,
-        "phong-shadow-maps",
-        &["--ssaa", "2", "--dynamic-env"],
-        &dynamic,
-    );
-    let (es, ed) = (
-        sphere_relmse(&scene, &stat, &reference),
-        sphere_relmse(&scene, &dynamic, &reference),
-    );
+    let (es, ed) = static_and_dynamic(&scene, &glb, &reference, &stat, &dynamic);
     eprintln!("chrome ball under a sun, no environment: relMSE static {es:.4}, dynamic {ed:.4}");
     assert!(ed < 0.5 * es, "the dynamic map does not help: {ed} vs {es}");
 }
@@ -393,4 +373,26 @@ fn ball_box_floor() -> Scene {
         Mat4::IDENTITY,
     );
     scene
+}
+
+/// `phong-shadow-maps` of `glb` with the static maps (to `stat`) and with `--dynamic-env` (to
+/// `dynamic`), and their relMSE over the ball against `reference`.
+fn static_and_dynamic(
+    scene: &Scene,
+    glb: &Path,
+    reference: &Path,
+    stat: &Path,
+    dynamic: &Path,
+) -> (f64, f64) {
+    render(glb, "phong-shadow-maps", &["--ssaa", "2"], stat);
+    render(
+        glb,
+        "phong-shadow-maps",
+        &["--ssaa", "2", "--dynamic-env"],
+        dynamic,
+    );
+    (
+        sphere_relmse(scene, stat, reference),
+        sphere_relmse(scene, dynamic, reference),
+    )
 }
