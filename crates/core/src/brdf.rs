@@ -446,6 +446,28 @@ pub fn fresnel_dielectric(c: f64, eta: f64) -> f64 {
     0.5 * a * a * (1.0 + b * b)
 }
 
+/// Exact unpolarised Fresnel reflectance of a conductor of complex index `eta + i·k` (relative
+/// to the outside medium) for the cosine `c` of the incident direction with the (micro)normal:
+/// the mean of the s- and p-polarised reflectances (Born & Wolf; the form of Pharr et al.,
+/// *Physically Based Rendering*, §9.3 "Fresnel reflectance for conductors"). With k = 0 it is
+/// [`fresnel_dielectric`] (outside total internal reflection); at normal incidence it is
+/// ((η−1)² + k²)/((η+1)² + k²).
+pub fn fresnel_conductor(c: f64, eta: f64, k: f64) -> f64 {
+    let c = c.abs().min(1.0);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let t0 = eta * eta - k * k - s2;
+    let a2b2 = (t0 * t0 + 4.0 * eta * eta * k * k).sqrt();
+    let a = (0.5 * (a2b2 + t0)).max(0.0).sqrt();
+    let t1 = a2b2 + c2;
+    let t2 = 2.0 * c * a;
+    let rs = (t1 - t2) / (t1 + t2);
+    let t3 = c2 * a2b2 + s2 * s2;
+    let t4 = t2 * s2;
+    let rp = rs * (t3 - t4) / (t3 + t4);
+    0.5 * (rs + rp)
+}
+
 /// Torrance–Sparrow / Cook–Torrance: F·G·D/(4⟨n,l⟩⟨n,v⟩), F exact dielectric.
 #[derive(Clone, Copy, Debug)]
 pub struct TorranceSparrow {

@@ -355,6 +355,68 @@ fn fresnel_is_exact() {
     );
 }
 
+/// Complex numbers as (re, im), just enough for Snell's law with a complex index.
+type C = (f64, f64);
+fn cmul(a: C, b: C) -> C {
+    (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0)
+}
+fn cdiv(a: C, b: C) -> C {
+    let d = b.0 * b.0 + b.1 * b.1;
+    ((a.0 * b.0 + a.1 * b.1) / d, (a.1 * b.0 - a.0 * b.1) / d)
+}
+fn csqrt(a: C) -> C {
+    let r = (a.0 * a.0 + a.1 * a.1).sqrt();
+    let re = (0.5 * (r + a.0)).max(0.0).sqrt();
+    let im = (0.5 * (r - a.0)).max(0.0).sqrt();
+    (re, if a.1 < 0.0 { -im } else { im })
+}
+
+/// The amplitude ratios with a complex index n = η + ik and complex cos θt (Snell's law):
+/// independent of the closed form in `fresnel_conductor`.
+fn fresnel_complex_snell(cos_i: f64, eta: f64, k: f64) -> f64 {
+    let n: C = (eta, k);
+    let sin2 = 1.0 - cos_i * cos_i;
+    let n2 = cmul(n, n);
+    let q = cdiv((sin2, 0.0), n2);
+    let cos_t = csqrt((1.0 - q.0, -q.1));
+    let n_ct = cmul(n, cos_t);
+    let rs = cdiv((cos_i - n_ct.0, -n_ct.1), (cos_i + n_ct.0, n_ct.1));
+    let n_ci = (n.0 * cos_i, n.1 * cos_i);
+    let rp = cdiv(
+        (n_ci.0 - cos_t.0, n_ci.1 - cos_t.1),
+        (n_ci.0 + cos_t.0, n_ci.1 + cos_t.1),
+    );
+    0.5 * (rs.0 * rs.0 + rs.1 * rs.1 + rp.0 * rp.0 + rp.1 * rp.1)
+}
+
+#[test]
+fn conductor_fresnel_is_exact() {
+    // Gold's green channel, silver's red, chromium's blue, and a dielectric (k = 0).
+    for (eta, k) in [
+        (0.374957, 2.38572),
+        (0.155265, 4.82835),
+        (1.6547, 3.75495),
+        (1.5, 0.0),
+    ] {
+        let f0 = ((eta - 1.0) * (eta - 1.0) + k * k) / ((eta + 1.0) * (eta + 1.0) + k * k);
+        assert!((fresnel_conductor(1.0, eta, k) - f0).abs() < 1e-12);
+        for i in 0..=900 {
+            let c = (i as f64 / 10.0).to_radians().cos();
+            let f = fresnel_conductor(c, eta, k);
+            assert!(
+                (f - fresnel_complex_snell(c, eta, k)).abs() < 1e-9,
+                "η {eta} k {k} θ {}: {f}",
+                i as f64 / 10.0
+            );
+            if k == 0.0 {
+                assert!((f - fresnel_dielectric(c, eta)).abs() < 1e-9);
+            }
+        }
+        // Grazing incidence reflects everything.
+        assert!((fresnel_conductor(0.0, eta, k) - 1.0).abs() < 1e-9);
+    }
+}
+
 #[test]
 fn smith_masking_properties() {
     for d in [

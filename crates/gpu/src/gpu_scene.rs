@@ -454,8 +454,12 @@ fn gpu_material(m: &lightlab_scene::Material) -> GpuMaterial {
         } else {
             0.0
         },
-        pad2: 0.0,
+        thickness: m.thickness,
         uv_transform,
+        conductor_eta: m
+            .conductor
+            .map_or([0.0; 4], |c| c.eta.extend(1.0).to_array()),
+        conductor_k: m.conductor.map_or([0.0; 4], |c| c.k.extend(1.0).to_array()),
     }
 }
 

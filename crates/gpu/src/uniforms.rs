@@ -143,9 +143,13 @@ pub struct GpuMaterial {
     pub sway: f32,
     pub ior: f32,
     pub spec_transmission: f32,
-    pub pad2: f32,
+    /// KHR_materials_volume thickness (0: thin-walled glass).
+    pub thickness: f32,
     /// The KHR_texture_transform of each texture (WGSL comment), two rows each.
     pub uv_transform: [[f32; 4]; 12],
+    /// A measured metal's complex index η + ik (xyz), w = 1 when present.
+    pub conductor_eta: [f32; 4],
+    pub conductor_k: [f32; 4],
 }
 
 /// The WGSL source that declares these structs.
@@ -268,8 +272,10 @@ mod tests {
                     sway,
                     ior,
                     spec_transmission,
-                    pad2,
-                    uv_transform
+                    thickness,
+                    uv_transform,
+                    conductor_eta,
+                    conductor_k
                 ),
             ),
         ];

@@ -3,7 +3,8 @@
 //! Import reads the default scene's node tree (world transforms composed), triangle primitives
 //! (POSITION, NORMAL, TANGENT, TEXCOORD_0/1, COLOR_0, indices; strips and fans converted),
 //! EXT_mesh_gpu_instancing, metallic–roughness materials with KHR_materials_emissive_strength,
-//! KHR_materials_specular and KHR_materials_diffuse_transmission, textures with
+//! KHR_materials_specular, KHR_materials_diffuse_transmission, KHR_materials_transmission,
+//! KHR_materials_ior and KHR_materials_volume (its thickness factor only), textures with
 //! KHR_texture_transform, perspective cameras (a node's scale scales znear and zfar) and
 //! KHR_lights_punctual.
 //!
@@ -35,10 +36,11 @@ pub const MAX_NODE_DEPTH: usize = 1024;
 /// bounds its vertex buffers: about 10 GB).
 pub const MAX_TRIANGLES: u64 = 100_000_000;
 
-pub const SUPPORTED_EXTENSIONS: [&str; 8] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 9] = [
     "KHR_lights_punctual",
     "KHR_materials_transmission",
     "KHR_materials_ior",
+    "KHR_materials_volume",
     "KHR_texture_transform",
     "EXT_mesh_gpu_instancing",
     "KHR_materials_emissive_strength",
@@ -127,8 +129,9 @@ fn check_required_extensions(path: &Path, bytes: &[u8]) -> Result<(), SceneError
 
 /// The extensions lightlab reads that the gltf crate's validator refuses as *required* (it
 /// knows only its own features' extensions).
-const REQUIRED_FOR_LIGHTLAB: [&str; 3] = [
+const REQUIRED_FOR_LIGHTLAB: [&str; 4] = [
     "EXT_mesh_gpu_instancing",
+    "KHR_materials_volume",
     "KHR_materials_specular",
     "KHR_materials_diffuse_transmission",
 ];
@@ -618,6 +621,15 @@ impl Importer<'_> {
                 )
             })?,
         };
+        let conductor = conductor_extras(m).map_err(|e| {
+            gltf_err(
+                self.path,
+                format!(
+                    "material '{}': extras.lightlab.conductor {e}",
+                    m.name().unwrap_or("material")
+                ),
+            )
+        })?;
         Ok(Material {
             name: m.name().unwrap_or("material").into(),
             base_color: Vec4::from_array(pbr.base_color_factor()),
@@ -650,6 +662,12 @@ impl Importer<'_> {
                 .ior()
                 .filter(|n| n.is_finite() && *n >= 1.0)
                 .unwrap_or(1.5),
+            conductor,
+            thickness: m
+                .extension_value("KHR_materials_volume")
+                .and_then(|v| v.get("thicknessFactor")?.as_f64())
+                .filter(|t| t.is_finite() && *t > 0.0)
+                .unwrap_or(0.0) as f32,
         })
     }
 
@@ -1056,6 +1074,13 @@ fn material_json(m: &Material, used: &mut Vec<&'static str>) -> Value {
             json!({ "transmissionFactor": m.specular_transmission }),
         );
     }
+    if m.thickness > 0.0 {
+        use_ext_in(used, "KHR_materials_volume");
+        exts.insert(
+            "KHR_materials_volume".into(),
+            json!({ "thicknessFactor": m.thickness }),
+        );
+    }
     if m.ior != 1.5 {
         use_ext_in(used, "KHR_materials_ior");
         exts.insert("KHR_materials_ior".into(), json!({ "ior": m.ior }));
@@ -1078,10 +1103,66 @@ fn material_json(m: &Material, used: &mut Vec<&'static str>) -> Value {
     if m.sway != 0.0 {
         extras.insert("sway".into(), json!(m.sway));
     }
+    if let Some(c) = &m.conductor {
+        let v = match c.preset_name() {
+            Some(name) => json!(name),
+            None => json!({ "eta": c.eta.to_array(), "k": c.k.to_array() }),
+        };
+        extras.insert("conductor".into(), v);
+    }
     if !extras.is_empty() {
         v["extras"] = json!({ "lightlab": extras });
     }
     v
+}
+
+/// `extras.lightlab.conductor` of a material: a preset name or `{"eta": [r,g,b], "k": [r,g,b]}`
+/// (the error completes "extras.lightlab.conductor …").
+fn conductor_extras(m: &gltf::Material) -> Result<Option<Conductor>, String> {
+    let Some(v) =
+        extras_json(m.extras()).and_then(|v| v.get("lightlab")?.get("conductor").cloned())
+    else {
+        return Ok(None);
+    };
+    let names = || {
+        Conductor::PRESETS
+            .iter()
+            .map(|(n, _)| *n)
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let rgb = |key: &str| -> Result<Vec3, String> {
+        let a = v
+            .get(key)
+            .and_then(|a| a.as_array())
+            .filter(|a| a.len() == 3)
+            .ok_or_else(|| format!("needs '{key}' as three numbers"))?;
+        let mut out = [0f32; 3];
+        for (o, x) in out.iter_mut().zip(a) {
+            *o = x
+                .as_f64()
+                .ok_or_else(|| format!("'{key}' holds a non-number"))? as f32;
+        }
+        Ok(Vec3::from_array(out))
+    };
+    let c = match &v {
+        serde_json::Value::String(name) => Conductor::preset(name)
+            .ok_or_else(|| format!("'{name}' is not a known metal (known: {})", names()))?,
+        serde_json::Value::Object(_) => Conductor {
+            eta: rgb("eta")?,
+            k: rgb("k")?,
+        },
+        _ => {
+            return Err(format!(
+                "must be a metal's name ({}) or {{\"eta\": [r, g, b], \"k\": [r, g, b]}}",
+                names()
+            ));
+        }
+    };
+    if !c.is_valid() {
+        return Err("needs finite eta > 0 and k >= 0 in every channel".into());
+    }
+    Ok(Some(c))
 }
 
 /// A texture as PNG: 8- and 16-bit texels as stored (an import–export round trip keeps them

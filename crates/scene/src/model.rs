@@ -350,6 +350,101 @@ pub struct Material {
     /// KHR_materials_ior: the dielectric's index of refraction (F0 = ((n−1)/(n+1))², 0.04 at
     /// the default 1.5).
     pub ior: f32,
+    /// A measured metal (glTF `extras.lightlab.conductor`: a preset name or `{"eta": [r,g,b],
+    /// "k": [r,g,b]}`): the metallic part's Fresnel is the exact conductor reflectance of this
+    /// complex index, times the base colour (white for the measured metal), instead of Schlick
+    /// with F0 = base colour. The path tracer and the GPU's environment term use it exactly;
+    /// the GPU's direct light in the deferred path uses Schlick with its normal-incidence value.
+    pub conductor: Option<Conductor>,
+    /// KHR_materials_volume `thicknessFactor` (metres, in the mesh's space): 0 (glTF's default
+    /// without the extension) makes glass thin-walled — a sheet whose transmitted light goes
+    /// straight through, reflecting the sheet's Fresnel reflectance; above 0 the mesh bounds a
+    /// solid whose surface refracts. Attenuation inside the volume is not modelled.
+    pub thickness: f32,
+}
+
+/// A conductor's complex index of refraction η + ik, per RGB channel (relative to air).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Conductor {
+    pub eta: Vec3,
+    pub k: Vec3,
+}
+
+impl Conductor {
+    /// Measured metals at about 650, 550 and 450 nm (R, G, B), from the optical constants of
+    /// Johnson & Christy (1972: gold, silver, copper) and Rakić (1995, 1998: aluminium,
+    /// chromium), as tabulated with the spectral data of common renderers. A single wavelength
+    /// per channel, not an average over the channel's band.
+    pub const PRESETS: [(&'static str, Conductor); 5] = [
+        (
+            "gold",
+            Conductor {
+                eta: Vec3::new(0.143119, 0.374957, 1.44248),
+                k: Vec3::new(3.98316, 2.38572, 1.60322),
+            },
+        ),
+        (
+            "silver",
+            Conductor {
+                eta: Vec3::new(0.155265, 0.116723, 0.138342),
+                k: Vec3::new(4.82835, 3.12225, 2.14696),
+            },
+        ),
+        (
+            "copper",
+            Conductor {
+                eta: Vec3::new(0.200438, 0.924033, 1.10221),
+                k: Vec3::new(3.91295, 2.45285, 2.14219),
+            },
+        ),
+        (
+            "aluminium",
+            Conductor {
+                eta: Vec3::new(1.65746, 0.880369, 0.521229),
+                k: Vec3::new(9.22387, 6.26952, 4.837),
+            },
+        ),
+        (
+            "chrome",
+            Conductor {
+                eta: Vec3::new(4.36968, 2.9167, 1.6547),
+                k: Vec3::new(5.20643, 4.23136, 3.75495),
+            },
+        ),
+    ];
+
+    /// A preset by name (`gold`, `silver`, `copper`, `aluminium`, `chrome`).
+    pub fn preset(name: &str) -> Option<Conductor> {
+        Self::PRESETS
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, c)| *c)
+    }
+
+    /// The preset's name when this is one.
+    pub fn preset_name(&self) -> Option<&'static str> {
+        Self::PRESETS
+            .iter()
+            .find(|(_, c)| c == self)
+            .map(|(n, _)| *n)
+    }
+
+    /// Exact reflectance per channel at cosine `c` ([`lightlab_core::brdf::fresnel_conductor`]).
+    pub fn fresnel(&self, c: f32) -> Vec3 {
+        let f = |i: usize| {
+            lightlab_core::brdf::fresnel_conductor(c as f64, self.eta[i] as f64, self.k[i] as f64)
+                as f32
+        };
+        Vec3::new(f(0), f(1), f(2))
+    }
+
+    /// Whether both indices are finite, η > 0 and k ≥ 0 in every channel.
+    pub fn is_valid(&self) -> bool {
+        self.eta.is_finite()
+            && self.k.is_finite()
+            && self.eta.min_element() > 0.0
+            && self.k.min_element() >= 0.0
+    }
 }
 
 impl Default for Material {
@@ -375,6 +470,8 @@ impl Default for Material {
             brdf: BrdfModel::Pbr,
             specular_transmission: 0.0,
             ior: 1.5,
+            conductor: None,
+            thickness: 0.0,
         }
     }
 }

@@ -1,7 +1,9 @@
 //! glTF round trips of every built-in scene, and the bad-input cases of the loader.
 
 use glam::{Vec3, Vec4};
-use lightlab_scene::{BrdfModel, LoadOptions, Scene, SceneError, builtin, gltf_io, load};
+use lightlab_scene::{
+    BrdfModel, Conductor, LoadOptions, Scene, SceneError, builtin, gltf_io, load,
+};
 use std::path::Path;
 
 fn world_triangles(s: &Scene) -> Vec<[Vec3; 3]> {
@@ -41,6 +43,11 @@ fn assert_same_scene(a: &Scene, b: &Scene) {
         assert_eq!(x.transmission_texture, y.transmission_texture);
         assert_eq!(x.sway, y.sway);
         assert_eq!(x.brdf, y.brdf);
+        assert_eq!(x.conductor, y.conductor);
+        assert_eq!(
+            (x.specular_transmission, x.ior, x.thickness),
+            (y.specular_transmission, y.ior, y.thickness)
+        );
         assert_eq!(x.base_color_texture, y.base_color_texture);
         assert_eq!(x.normal_texture, y.normal_texture);
     }
@@ -257,6 +264,72 @@ fn a_good_minimal_file_loads_and_gets_a_framing_camera() {
     let centre = Vec3::new(0.5, 0.5, 0.0);
     let d = cam.ray_direction(glam::Vec2::ZERO, 1.0);
     assert!((d - (centre - cam.position()).normalize()).length() < 1e-5);
+}
+
+/// Measured metals (extras.lightlab.conductor: a preset or an explicit complex index) and
+/// KHR_materials_volume load; bad ones are named.
+#[test]
+fn conductors_and_volumes_load_and_bad_ones_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let with = |name: &str, conductor: serde_json::Value| {
+        triangle_file(dir.path(), name, GOOD, true, |j| {
+            j["materials"] = serde_json::json!([{
+                "name": "m",
+                "extras": { "lightlab": { "conductor": conductor } },
+                "extensions": {
+                    "KHR_materials_transmission": { "transmissionFactor": 0.5 },
+                    "KHR_materials_volume": { "thicknessFactor": 0.25 }
+                }
+            }]);
+            j["meshes"][0]["primitives"][0]["material"] = serde_json::json!(0);
+            j["extensionsUsed"] =
+                serde_json::json!(["KHR_materials_transmission", "KHR_materials_volume"]);
+            j["extensionsRequired"] = serde_json::json!(["KHR_materials_volume"]);
+        })
+    };
+    let s = load(
+        with("gold", serde_json::json!("gold")).to_str().unwrap(),
+        LoadOptions::default(),
+    )
+    .unwrap();
+    let m = &s.materials[0];
+    assert_eq!(m.conductor, Conductor::preset("gold"));
+    assert_eq!((m.specular_transmission, m.thickness), (0.5, 0.25));
+    let explicit = serde_json::json!({ "eta": [0.2, 0.9, 1.1], "k": [3.9, 2.4, 2.1] });
+    let s = load(
+        with("explicit", explicit).to_str().unwrap(),
+        LoadOptions::default(),
+    )
+    .unwrap();
+    let c = s.materials[0].conductor.unwrap();
+    assert_eq!(
+        (c.eta, c.k),
+        (Vec3::new(0.2, 0.9, 1.1), Vec3::new(3.9, 2.4, 2.1))
+    );
+    for (name, bad, says) in [
+        (
+            "tin",
+            serde_json::json!("tin"),
+            "'tin' is not a known metal",
+        ),
+        (
+            "short",
+            serde_json::json!({ "eta": [1, 2], "k": [1, 2, 3] }),
+            "'eta' as three numbers",
+        ),
+        (
+            "neg",
+            serde_json::json!({ "eta": [1, 2, 3], "k": [1, -2, 3] }),
+            "k >= 0",
+        ),
+        ("num", serde_json::json!(3), "must be a metal's name"),
+    ] {
+        let msg = load_err(&with(name, bad));
+        assert!(
+            msg.contains("conductor") && msg.contains(says),
+            "{name}: {msg}"
+        );
+    }
 }
 
 #[test]

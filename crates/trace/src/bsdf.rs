@@ -8,14 +8,22 @@
 //!   `transmission` of it leaves through the back side instead of the front. With
 //!   `metallic = 0` and `specular = 0` this is exactly Lambert.
 //! - Specular: Trowbridge–Reitz (GGX) D with α = roughness², height-correlated Smith G2, Schlick
-//!   Fresnel with F0 = mix(0.04·specular, base, metallic) (glTF metallic–roughness).
+//!   Fresnel with F0 = mix(0.04·specular, base, metallic) (glTF metallic–roughness). A measured
+//!   metal (`Material::conductor`) replaces the metallic part's Schlick term by the exact
+//!   conductor reflectance of its complex index times the base colour.
 //! - Specular transmission (KHR_materials_transmission, factor t): a fraction t of the BSDF is
 //!   a smooth dielectric interface of index `ior` — reflection with the exact Fresnel
 //!   reflectance, refraction (tinted by the base colour) otherwise, total internal reflection
-//!   included — and the rest, (1−t), the model above. The interface is a delta lobe: `eval` and
-//!   `pdf` hold only the (1−t) part, and `sample` returns the delta branch with a pdf of
-//!   [`DELTA_PDF`], so that `f·cos/pdf` is its weight and multiple importance sampling gives the
-//!   BSDF sample all the weight. Roughness does not blur the interface (no rough BTDF).
+//!   included — and the rest, (1−t), the model above. A smooth interface (roughness below
+//!   [`ROUGH_INTERFACE`]) is a delta lobe: `eval` and `pdf` hold only the (1−t) part, and
+//!   `sample` returns the delta branch with a pdf of [`DELTA_PDF`], so that `f·cos/pdf` is its
+//!   weight and multiple importance sampling gives the BSDF sample all the weight. A rough one
+//!   (frosted glass) is the GGX microfacet dielectric of Walter et al. 2007 (reflection and
+//!   refraction through microfacets of normal h, exact Fresnel at ⟨wo,h⟩), part of `eval` and
+//!   `pdf` like any lobe. Neither applies the (η_o/η_i)² radiance scaling across the interface:
+//!   it cancels along paths that enter and leave a closed object, which is what scenes hold.
+//!   Thin-walled glass (glTF without KHR_materials_volume) is a sheet: straight through,
+//!   reflecting 2F/(1+F), always smooth.
 //! - Sampling: one lobe chosen by its estimated albedo; diffuse by cosine (flipped for
 //!   transmission), specular by the distribution of normals D(h)·cosθh. The returned pdf is the
 //!   one-sample mixture, as multiple importance sampling needs.
@@ -31,18 +39,30 @@ use std::f32::consts::PI;
 /// The pdf reported for a delta lobe's sample (see the module doc).
 pub const DELTA_PDF: f32 = 1e8;
 
+/// The roughness from which a dielectric interface is a microfacet lobe rather than a delta.
+pub const ROUGH_INTERFACE: f32 = 0.05;
+
 #[derive(Clone, Copy, Debug)]
 pub struct Bsdf {
     /// Weight of the smooth dielectric interface (KHR_materials_transmission).
     pub delta: f32,
     pub ior: f32,
+    /// Thin-walled glass (`Material::thickness` 0): a sheet that transmits straight through
+    /// and reflects 2F/(1 + F), its two faces' reflections summed; always a delta lobe.
+    pub thin: bool,
     /// Whether `wo` lies outside the dielectric (on the surface's authored front side): the
     /// path tracer sets it per hit; refraction goes from 1 to `ior` when true.
     pub entering: bool,
     pub base: Vec3,
     pub kd_scale: f32,
     pub transmission: f32,
+    /// Reflectance at normal incidence (the classical models' specular colour, and sampling).
     pub f0: Vec3,
+    /// A measured metal: (metallic × base colour, complex index) replacing Schlick's metallic
+    /// part, F = (1 − metallic)·Schlick(c, f0d) + metallic·base·F_conductor(c).
+    pub conductor: Option<(Vec3, lightlab_scene::Conductor)>,
+    pub f0d: f32,
+    pub metallic: f32,
     pub alpha: f32,
     pub specular: bool,
     /// Which specular lobe (the material's [`BrdfModel`]).
@@ -59,6 +79,27 @@ fn schlick(cos: f32, f0: Vec3) -> Vec3 {
 }
 
 impl Bsdf {
+    /// Fresnel reflectance of the specular lobe at cosine `c` (with the microfacet normal).
+    #[inline]
+    pub fn fresnel(&self, c: f32) -> Vec3 {
+        Self::fresnel_of(&self.conductor, self.f0, self.f0d, self.metallic, c)
+    }
+
+    fn fresnel_of(
+        conductor: &Option<(Vec3, lightlab_scene::Conductor)>,
+        f0: Vec3,
+        f0d: f32,
+        metallic: f32,
+        c: f32,
+    ) -> Vec3 {
+        match conductor {
+            None => schlick(c, f0),
+            Some((metal, m)) => {
+                schlick(c, Vec3::splat(f0d)) * (1.0 - metallic) + *metal * m.fresnel(c)
+            }
+        }
+    }
+
     /// The specular lobe's microfacet distribution: core's GGX (one implementation of D, Λ and
     /// the half-vector sampler for the whole toolkit).
     #[inline]
@@ -87,7 +128,11 @@ impl Bsdf {
             transmission *= scene.sample(r, uv).w;
         }
         let f0d = material.dielectric_f0();
-        let f0 = Vec3::splat(f0d).lerp(base, metallic);
+        let conductor = material.conductor.map(|m| (base * metallic, m));
+        let f0 = match &conductor {
+            None => Vec3::splat(f0d).lerp(base, metallic),
+            Some((metal, m)) => Vec3::splat(f0d * (1.0 - metallic)) + *metal * m.fresnel(1.0),
+        };
         let model = material.brdf;
         let specular = model != BrdfModel::Lambert && (metallic > 0.0 || material.specular > 0.0);
         let fd = schlick(wo_z, Vec3::splat(f0d)).x;
@@ -101,7 +146,7 @@ impl Bsdf {
         let ws = if !specular {
             0.0
         } else if model == BrdfModel::Pbr {
-            luminance(schlick(wo_z, f0))
+            luminance(Self::fresnel_of(&conductor, f0, f0d, metallic, wo_z))
         } else {
             luminance(f0)
         };
@@ -120,11 +165,15 @@ impl Bsdf {
                 0.0
             },
             ior: material.ior,
+            thin: material.thickness <= 0.0,
             entering: true,
             base,
             kd_scale,
             transmission: transmission.clamp(0.0, 1.0),
             f0,
+            conductor,
+            f0d,
+            metallic,
             alpha,
             specular,
             model,
@@ -140,11 +189,15 @@ impl Bsdf {
         Bsdf {
             delta: 0.0,
             ior: 1.5,
+            thin: false,
             entering: true,
             base: albedo,
             kd_scale: 1.0,
             transmission: 0.0,
             f0: Vec3::ZERO,
+            conductor: None,
+            f0d: 0.0,
+            metallic: 0.0,
             alpha: 1.0,
             specular: false,
             model: BrdfModel::Lambert,
@@ -172,9 +225,106 @@ impl Bsdf {
         }
     }
 
-    /// BSDF value f(wo, wi) (without the cosine; the delta interface excluded).
+    /// Whether the dielectric interface is a microfacet lobe (frosted glass), not a delta.
+    #[inline]
+    fn rough_interface(&self) -> bool {
+        self.delta > 0.0 && !self.thin && self.alpha >= ROUGH_INTERFACE * ROUGH_INTERFACE
+    }
+
+    /// BSDF value f(wo, wi) (without the cosine; a smooth interface's delta excluded).
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
-        self.eval_smooth(wo, wi) * (1.0 - self.delta)
+        let mut f = self.eval_smooth(wo, wi) * (1.0 - self.delta);
+        if self.rough_interface() {
+            f += self.interface_eval(wo, wi) * self.delta;
+        }
+        f
+    }
+
+    /// Indices of refraction on wo's side and on the other.
+    #[inline]
+    fn indices(&self) -> (f32, f32) {
+        if self.entering {
+            (1.0, self.ior)
+        } else {
+            (self.ior, 1.0)
+        }
+    }
+
+    /// The microfacet normal (h.z > 0) that takes wo to wi by reflection or refraction, with
+    /// the Jacobian dω_h/dω_wi; None where no microfacet facing wo does.
+    fn interface_h(&self, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32)> {
+        let (n_o, n_i) = self.indices();
+        if wi.z > 0.0 {
+            let h = (wo + wi).normalize_or_zero();
+            let c = wo.dot(h);
+            (h.z > 0.0 && c > 0.0).then(|| (h, 1.0 / (4.0 * c)))
+        } else {
+            let v = wo * n_o + wi * n_i;
+            let mut h = (-v).normalize_or_zero();
+            if h.z < 0.0 {
+                h = -h;
+            }
+            let (co, ci) = (wo.dot(h), wi.dot(h));
+            if !(h.z > 0.0 && co > 0.0 && ci < 0.0) {
+                return None;
+            }
+            Some((h, n_i * n_i * -ci / v.length_squared()))
+        }
+    }
+
+    /// The rough interface's f(wo, wi): F·D·G/(4⟨n,wo⟩⟨n,wi⟩) reflected; refracted
+    /// |wi·h||wo·h|/(|wi.z||wo.z|)·η_i²(1−F)·D·G/(η_o(wo·h) + η_i(wi·h))², tinted.
+    fn interface_eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        let Some((h, jacobian)) = self.interface_h(wo, wi) else {
+            return Vec3::ZERO;
+        };
+        let (n_o, n_i) = self.indices();
+        let ggx = self.ggx();
+        let c = wo.dot(h);
+        let f = lightlab_core::brdf::fresnel_dielectric(c as f64, (n_i / n_o) as f64) as f32;
+        let d = ggx.d(h.z as f64) as f32;
+        let g = (1.0 / (1.0 + ggx.lambda(wo.z as f64) + ggx.lambda(wi.z.abs() as f64))) as f32;
+        if wi.z > 0.0 {
+            Vec3::splat(f * d * g / (4.0 * wo.z * wi.z))
+        } else {
+            // D·(1−F)·G·|wo·h|·(dω_h/dω_wi)/(|wi.z||wo.z|): Walter's Eq 21 without the radiance
+            // scaling (module doc).
+            self.base * ((1.0 - f) * d * g * c * jacobian / (wi.z.abs() * wo.z))
+        }
+    }
+
+    /// Density of the rough interface's sampler: h by D(h)·h.z, reflection with probability
+    /// F(wo·h).
+    fn interface_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let Some((h, jacobian)) = self.interface_h(wo, wi) else {
+            return 0.0;
+        };
+        let (n_o, n_i) = self.indices();
+        let f =
+            lightlab_core::brdf::fresnel_dielectric(wo.dot(h) as f64, (n_i / n_o) as f64) as f32;
+        let choice = if wi.z > 0.0 { f } else { 1.0 - f };
+        self.ggx().d(h.z as f64) as f32 * h.z * choice * jacobian
+    }
+
+    /// Sample the rough interface: a microfacet normal, then reflection or refraction by its
+    /// Fresnel reflectance.
+    fn interface_sample(&self, wo: Vec3, u_choice: f32, u: Vec2) -> Option<Vec3> {
+        let h = self.ggx().sample_h(u.as_dvec2()).as_vec3();
+        let c = wo.dot(h);
+        if c <= 0.0 {
+            return None;
+        }
+        let (n_o, n_i) = self.indices();
+        let f = lightlab_core::brdf::fresnel_dielectric(c as f64, (n_i / n_o) as f64) as f32;
+        let wi = if u_choice < f {
+            2.0 * c * h - wo
+        } else {
+            let eta = n_o / n_i;
+            let cos_t = (1.0 - eta * eta * (1.0 - c * c)).max(0.0).sqrt();
+            (h * (eta * c - cos_t) - wo * eta).normalize()
+        };
+        // A reflection below the surface or a refraction above it is not a valid sample.
+        ((wi.z > 0.0) == (u_choice < f)).then_some(wi)
     }
 
     fn eval_smooth(&self, wo: Vec3, wi: Vec3) -> Vec3 {
@@ -191,7 +341,7 @@ impl Bsdf {
             let ggx = self.ggx();
             let d = ggx.d(h.z as f64) as f32;
             let g = (1.0 / (1.0 + ggx.lambda(wo.z as f64) + ggx.lambda(wi.z as f64))) as f32;
-            let fr = schlick(wo.dot(h), self.f0);
+            let fr = self.fresnel(wo.dot(h));
             f += fr * (d * g / (4.0 * wo.z * wi.z));
         }
         f
@@ -199,7 +349,11 @@ impl Bsdf {
 
     /// Density of [`Self::sample`] choosing `wi` (solid angle).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.pdf_smooth(wo, wi) * (1.0 - self.delta)
+        let mut p = self.pdf_smooth(wo, wi) * (1.0 - self.delta);
+        if self.rough_interface() {
+            p += self.interface_pdf(wo, wi) * self.delta;
+        }
+        p
     }
 
     fn pdf_smooth(&self, wo: Vec3, wi: Vec3) -> f32 {
@@ -221,11 +375,24 @@ impl Bsdf {
 
     /// Sample an incident direction: (wi, f, pdf), or None when the sample is invalid.
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
-        if u_lobe < self.delta {
-            return self.sample_interface(wo, u_lobe / self.delta);
+        let wi = if u_lobe < self.delta {
+            if !self.rough_interface() {
+                return self.sample_interface(wo, u_lobe / self.delta);
+            }
+            self.interface_sample(wo, u_lobe / self.delta, u)?
+        } else {
+            self.sample_base(wo, (u_lobe - self.delta) / (1.0 - self.delta), u)?
+        };
+        let pdf = self.pdf(wo, wi);
+        if pdf <= 0.0 || !pdf.is_finite() {
+            return None;
         }
-        let u_lobe = (u_lobe - self.delta) / (1.0 - self.delta);
-        let wi = if u_lobe < self.p_spec {
+        Some((wi, self.eval(wo, wi), pdf))
+    }
+
+    /// A direction from the (1 − delta) part: the specular lobe or the diffuse one.
+    fn sample_base(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<Vec3> {
+        Some(if u_lobe < self.p_spec {
             if let Some(wi) = self.classic(|b| b.sample(wo.as_dvec3(), u.as_dvec2())) {
                 wi?.as_vec3()
             } else {
@@ -244,12 +411,7 @@ impl Bsdf {
                 d.z = -d.z;
             }
             d
-        };
-        let pdf = self.pdf(wo, wi);
-        if pdf <= 0.0 || !pdf.is_finite() {
-            return None;
-        }
-        Some((wi, self.eval(wo, wi), pdf))
+        })
     }
 
     /// The smooth dielectric interface: reflect with probability F (exact Fresnel), refract
@@ -264,6 +426,15 @@ impl Bsdf {
         };
         let cos_o = wo.z;
         let f = lightlab_core::brdf::fresnel_dielectric(cos_o as f64, 1.0 / eta as f64) as f32;
+        if self.thin {
+            // The sheet's reflectance with every internal bounce: F + (1−F)²F/(1 − F²).
+            let (wi, weight) = if u < 2.0 * f / (1.0 + f) {
+                (Vec3::new(-wo.x, -wo.y, wo.z), Vec3::ONE)
+            } else {
+                (-wo, self.base)
+            };
+            return Some((wi, weight * DELTA_PDF / wi.z.abs().max(1e-8), DELTA_PDF));
+        }
         let (wi, weight) = if u < f {
             (Vec3::new(-wo.x, -wo.y, wo.z), Vec3::ONE)
         } else {
@@ -346,11 +517,26 @@ mod tests {
                 specular: 0.0,
                 ..Default::default()
             },
+            frosted(0.3, 1.0),
+            frosted(0.6, 0.5),
+            Material {
+                name: "gold".into(),
+                base_color: Vec4::ONE,
+                roughness: 0.3,
+                metallic: 1.0,
+                conductor: lightlab_scene::Conductor::preset("gold"),
+                ..Default::default()
+            },
         ];
-        for m in mats {
+        for (m, entering) in mats
+            .iter()
+            .map(|m| (m, true))
+            .chain([(&frosted(0.3, 1.0), false)])
+        {
             for wo_z in [0.9f32, 0.5, 0.2] {
                 let wo = Vec3::new((1.0 - wo_z * wo_z).sqrt(), 0.0, wo_z);
-                let b = bsdf(m.clone(), wo_z);
+                let mut b = bsdf(m.clone(), wo_z);
+                b.entering = entering;
                 let mut rng = Rng::new(11, 0);
                 let n = 400_000;
                 let (mut s1, mut s2, mut u1, mut u2) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
@@ -377,6 +563,93 @@ mod tests {
                     m.name
                 );
             }
+        }
+    }
+
+    /// Frosted glass: a rough interface of weight `t` over a white diffuse base.
+    fn frosted(roughness: f32, t: f32) -> Material {
+        Material {
+            name: format!("frosted {roughness} {t}"),
+            base_color: Vec4::ONE,
+            roughness,
+            specular_transmission: t,
+            ior: 1.5,
+            thickness: 1.0,
+            ..Default::default()
+        }
+    }
+
+    /// Pearson's χ² of the rough interface's samples against its pdf, over 16 × 32 bins of
+    /// (cos θ, φ) on the whole sphere (reflection and refraction), from outside and inside.
+    #[test]
+    fn rough_interface_samples_follow_its_pdf() {
+        let (nt, np) = (16usize, 32usize);
+        for (roughness, entering, wo_z) in
+            [(0.3, true, 0.7f32), (0.5, false, 0.9), (0.2, false, 0.5)]
+        {
+            let mut b = bsdf(frosted(roughness, 1.0), wo_z);
+            b.entering = entering;
+            let wo = Vec3::new((1.0 - wo_z * wo_z).sqrt(), 0.0, wo_z);
+            let bin = |d: Vec3| {
+                let t = (((d.z + 1.0) * 0.5 * nt as f32) as usize).min(nt - 1);
+                let phi = d.y.atan2(d.x).rem_euclid(std::f32::consts::TAU);
+                let p = ((phi / std::f32::consts::TAU * np as f32) as usize).min(np - 1);
+                t * np + p
+            };
+            let n = 500_000;
+            let mut observed = vec![0f64; nt * np];
+            let mut rng = Rng::new(5, 0);
+            for _ in 0..n {
+                if let Some((wi, _, _)) = b.sample(wo, rng.next_f32(), rng.next_vec2()) {
+                    observed[bin(wi)] += 1.0;
+                }
+            }
+            // Expected counts: the pdf integrated over each bin on a 24 × 24 midpoint grid
+            // (equal areas in cos θ × φ).
+            let mut expected = vec![0f64; nt * np];
+            let sub = 24;
+            let cell = 2.0 / (nt * sub) as f64 * std::f64::consts::TAU / (np * sub) as f64;
+            for i in 0..nt * sub {
+                let z = -1.0 + (i as f64 + 0.5) * 2.0 / (nt * sub) as f64;
+                for j in 0..np * sub {
+                    let phi = (j as f64 + 0.5) * std::f64::consts::TAU / (np * sub) as f64;
+                    let r = (1.0 - z * z).sqrt();
+                    let d = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+                    expected[bin(d)] += b.pdf(wo, d) as f64 * cell * n as f64;
+                }
+            }
+            let (mut chi2, mut dof) = (0.0, 0usize);
+            let (mut rest_o, mut rest_e) = (0.0, 0.0);
+            for (o, e) in observed.iter().zip(&expected) {
+                if *e >= 20.0 {
+                    chi2 += (o - e).powi(2) / e;
+                    dof += 1;
+                } else {
+                    rest_o += o;
+                    rest_e += e;
+                }
+            }
+            // Samples rejected (reflection below the surface, refraction above) leave the
+            // pdf's integral under one: both totals must agree.
+            let total_e: f64 = expected.iter().sum();
+            let total_o: f64 = observed.iter().sum();
+            assert!(
+                (total_o - total_e).abs() < 0.01 * n as f64,
+                "r {roughness} entering {entering}: {total_o} samples, pdf integrates to {total_e}"
+            );
+            if rest_e > 0.0 {
+                chi2 += (rest_o - rest_e).powi(2) / rest_e.max(1.0);
+                dof += 1;
+            }
+            let limit = dof as f64 + 5.0 * (2.0 * dof as f64).sqrt();
+            eprintln!(
+                "rough interface r {roughness} entering {entering}: χ² {chi2:.0}, {dof} bins"
+            );
+            assert!(dof > 50, "too few bins: {dof}");
+            assert!(
+                chi2 < limit,
+                "r {roughness} entering {entering}: χ² {chi2} over {dof} bins"
+            );
         }
     }
 

@@ -491,8 +491,55 @@ fn glass() -> Material {
         roughness: 0.0,
         specular_transmission: 1.0,
         ior: 1.5,
+        // A solid (KHR_materials_volume); 0 would make it thin-walled.
+        thickness: 1.0,
         ..Material::diffuse("glass", Vec3::ONE)
     }
+}
+
+/// Thin-walled glass (glTF's default without KHR_materials_volume): one double-sided quad is a
+/// sheet that light crosses without bending, reflecting 2F/(1+F). Seen at 60° in a sky lit only
+/// within 8° of the view direction, it transmits 1 − 2F/(1+F) of it (a solid interface would
+/// bend the ray out of the lit cone).
+#[test]
+fn thin_walled_glass_transmits_straight_through() {
+    let mut s = Scene::default();
+    let mut m = glass();
+    m.thickness = 0.0;
+    m.double_sided = true;
+    let m = s.add_material(m);
+    s.add_mesh(
+        geom::quad(
+            "pane",
+            [
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 0.0),
+            ],
+            m,
+        ),
+        Mat4::IDENTITY,
+    );
+    let d = Vec3::new(60f32.to_radians().sin(), 0.0, -60f32.to_radians().cos());
+    s.environment = Some(env_where(move |e| e.dot(d) > 8f32.to_radians().cos()));
+    s.cameras
+        .push(camera_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO));
+    let accel = Accel::new(&s);
+    let pt = PathTracer::new(&s, &accel);
+    let settings = RenderSettings {
+        max_depth: 16,
+        seed: 3,
+        ..Default::default()
+    };
+    let l = mean_radiance(&pt, Vec3::ZERO - d * 2.0, d, &settings, 20_000).x;
+    let f = lightlab_core::brdf::fresnel_dielectric(0.5, 1.5) as f32;
+    let expect = 1.0 - 2.0 * f / (1.0 + f);
+    eprintln!("thin-walled pane at 60°: {l} against 1 − 2F/(1+F) = {expect}");
+    assert!(
+        (l - expect).abs() < 0.01,
+        "pane transmits {l}, expected {expect}"
+    );
 }
 
 /// A clear glass slab in front of a white sky, seen at normal incidence: the light behind comes

@@ -140,10 +140,15 @@ struct GpuMaterial {
     // interface; env.wgsl refracts through it).
     ior: f32,
     spec_transmission: f32,
-    pad2: f32,
+    // KHR_materials_volume thickness: 0 = thin-walled glass (a sheet: straight through).
+    thickness: f32,
     // KHR_texture_transform of texture i (bit order of `flags`): rows 2i and 2i + 1 of the
     // 2×3 matrix, uv' = (dot(row0.xy, uv) + row0.z, dot(row1.xy, uv) + row1.z).
     uv_transform: array<vec4<f32>, 12>,
+    // A measured metal (Material::conductor): the complex index η + ik per channel, w = 1 when
+    // present (the metallic part's Fresnel is then exact instead of Schlick's).
+    conductor_eta: vec4<f32>,
+    conductor_k: vec4<f32>,
 }
 
 // The wind displacement of a world-space vertex (lightlab_core::wind::Wind::sway): `a` =
@@ -179,6 +184,16 @@ struct Surface {
     delta: f32,
     ior: f32,
     tint: vec3<f32>,
+    // Thin-walled glass (1): transmits straight through, reflects as a sheet.
+    thin: u32,
+    // A measured metal (1) with its complex index and metallic × base colour; its Fresnel is
+    // (1 − metallic)·Schlick(c, f0d) + metal·F_conductor(c). 0 where unknown (the deferred
+    // path's G-buffer does not carry it: Schlick with f0 there).
+    conductor: u32,
+    metallic: f32,
+    metal: vec3<f32>,
+    eta: vec3<f32>,
+    k: vec3<f32>,
 }
 
 fn sh9(n: vec3<f32>) -> array<f32, 9> {
@@ -242,7 +257,12 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
         let dd = nh * nh * (a2 - 1.0) + 1.0;
         let d = a2 / (PI * dd * dd);
         let g = 1.0 / (1.0 + ggx_lambda(nv, a) + ggx_lambda(nl, a));
-        f += schlick(dot(v, h), s.f0) * (d * g / (4.0 * nv * nl) * (1.0 - s.delta));
+        f += surface_fresnel(s, dot(v, h)) * (d * g / (4.0 * nv * nl) * (1.0 - s.delta));
+        // Frosted glass (roughness from trace::bsdf::ROUGH_INTERFACE): the interface's microfacet
+        // reflection with the exact dielectric Fresnel; a smooth one is a delta lobe that only
+        // the environment term sees.
+        let frosted = select(0.0, s.delta, s.roughness >= 0.05 && s.thin == 0u);
+        f += vec3<f32>(fresnel_dielectric(dot(v, h), s.ior) * d * g / (4.0 * nv * nl) * frosted);
     } else if s.model == 2u {
         let e = phong_exponent(s.roughness);
         let r = 2.0 * nv * s.n - v;
@@ -254,6 +274,31 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
         f += s.f0 * (norm * pow(max(dot(s.n, h), 0.0), e));
     }
     return f * nl;
+}
+
+// Exact unpolarised Fresnel reflectance of a conductor of complex index eta + i·k per channel
+// (lightlab_core::brdf::fresnel_conductor).
+fn fresnel_conductor(c_in: f32, eta: vec3<f32>, k: vec3<f32>) -> vec3<f32> {
+    let c = min(abs(c_in), 1.0);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let t0 = eta * eta - k * k - vec3<f32>(s2);
+    let a2b2 = sqrt(t0 * t0 + 4.0 * eta * eta * k * k);
+    let a = sqrt(max(0.5 * (a2b2 + t0), vec3<f32>(0.0)));
+    let t1 = a2b2 + vec3<f32>(c2);
+    let t2 = 2.0 * c * a;
+    let rs = (t1 - t2) / (t1 + t2);
+    let t3 = c2 * a2b2 + vec3<f32>(s2 * s2);
+    let t4 = t2 * s2;
+    let rp = rs * (t3 - t4) / (t3 + t4);
+    return 0.5 * (rs + rp);
+}
+
+// The specular lobe's Fresnel reflectance at cosine c with the microfacet normal.
+// `select`, not a branch on the material's flag (see env.wgsl on lavapipe).
+fn surface_fresnel(s: Surface, c: f32) -> vec3<f32> {
+    let measured = schlick(c, vec3<f32>(s.f0d)) * (1.0 - s.metallic) + s.metal * fresnel_conductor(c, s.eta, s.k);
+    return select(schlick(c, s.f0), measured, s.conductor != 0u);
 }
 
 // Exact unpolarised Fresnel reflectance for cosine c and relative index eta = n_t / n_i

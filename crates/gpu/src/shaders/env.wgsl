@@ -163,11 +163,16 @@ fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) 
 // by the base colour. One interface: the ray is not followed out of the object again.
 fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32, base: u32, instance: u32) -> vec3<f32> {
     let lod = clamp(log2(max(dr, 1e-8) / max(env_u.texel_angle, 1e-8)), 0.0, max(env_u.mips - 1.0, 0.0));
-    let f = fresnel_dielectric(nv, s.ior);
+    let f1 = fresnel_dielectric(nv, s.ior);
     var t = refract(-v, s.n, 1.0 / s.ior);
     if env_u.refraction == 2u {
         t = env_exit(s, t, instance);
     }
+    // A thin-walled sheet: its two faces' reflections, and light straight through (`select`:
+    // no branch on the material's flag, as above).
+    let thin = s.thin != 0u;
+    let f = select(f1, 2.0 * f1 / (1.0 + f1), thin);
+    t = select(t, -v, thin);
     let reflected = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
     let refracted = env_lobe(base, env_u.ggx_set, s.roughness, safe_normalize(t, -v), lod);
     return reflected * f + s.tint * refracted * (1.0 - f);
@@ -221,7 +226,11 @@ fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32, base: u32) -> vec3<f32
     if ggx {
         let l = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
         let ab = textureSampleLevel(env_lut, env_sampler, vec2<f32>(nv, s.roughness), 0.0).rg;
-        out = l * (s.f0 * ab.x + ab.y);
+        // The table integrates Schlick's Fresnel: a measured metal scales by the exact
+        // conductor's ratio to it at the view angle (exact for a mirror, where the lobe sees
+        // only that angle). `select`, not a branch on the material's flag (lavapipe, above).
+        let ratio = surface_fresnel(s, nv) / max(schlick(nv, s.f0), vec3<f32>(1e-4));
+        out = l * (s.f0 * ab.x + ab.y) * select(vec3<f32>(1.0), ratio, s.conductor != 0u);
     } else {
         var roughness = s.roughness;
         if s.model == 3u {

@@ -119,10 +119,18 @@ fn surface(in: VertexOut, front: bool) -> Surface {
     s.delta = material.spec_transmission * (1.0 - metallic);
     s.ior = material.ior;
     s.tint = base.rgb;
+    s.thin = u32(material.thickness <= 0.0);
     s.diffuse = base.rgb * (1.0 - metallic) * (1.0 - s.delta);
     let r = (material.ior - 1.0) / (material.ior + 1.0);
     s.f0d = r * r * material.specular;
     s.f0 = mix(vec3<f32>(s.f0d), base.rgb, metallic);
+    s.metallic = metallic;
+    s.metal = base.rgb * metallic;
+    s.eta = material.conductor_eta.xyz;
+    s.k = material.conductor_k.xyz;
+    s.conductor = u32(material.conductor_eta.w > 0.0);
+    let measured = s.f0d * (1.0 - metallic) + s.metal * fresnel_conductor(1.0, s.eta, s.k);
+    s.f0 = select(s.f0, measured, s.conductor != 0u);
     if material.model == 1u {
         s.f0 = vec3<f32>(0.0);
     }
@@ -428,6 +436,7 @@ fn gbuffer_surface(c: vec2<i32>) -> Surface {
     s.delta = textureLoad(gb_position, c, 0).w - 1.0;
     s.ior = 1.5;
     s.tint = vec3<f32>(1.0);
+    s.conductor = 0u;
     return s;
 }
 

@@ -681,6 +681,33 @@ fn dune_normal_map() -> Texture {
     }
 }
 
+/// A 128² tangent-space normal map of crossing waves (linear; xyz·½ + ½), periodic in the
+/// tile, slopes up to ≈25°: the bumps of the `spheres` torus (Heidrich's Fig 9.1 uses waves).
+fn wave_normal_map() -> Texture {
+    use std::f32::consts::TAU;
+    let n = 128u32;
+    let height =
+        |u: f32, v: f32| 0.025 * ((TAU * (2.0 * u + v)).sin() + 0.6 * (TAU * 3.0 * v).sin());
+    let e = 0.5 / n as f32;
+    let data = (0..n * n)
+        .map(|k| {
+            let (x, y) = (k % n, k / n);
+            let (u, v) = ((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
+            let du = (height(u + e, v) - height(u - e, v)) / (2.0 * e);
+            let dv = (height(u, v + e) - height(u, v - e)) / (2.0 * e);
+            let nrm = Vec3::new(-du, -dv, 1.0).normalize();
+            (nrm * 0.5 + Vec3::splat(0.5)).extend(1.0)
+        })
+        .collect();
+    Texture {
+        name: "waves_normal".into(),
+        width: n,
+        height: n,
+        texels: crate::Texels::Rgba32F(data),
+        srgb: false,
+    }
+}
+
 /// How the `prt` scene's decimated knot is made from the high-poly one.
 pub const KNOT_DECIMATION: crate::simplify::SimplifySettings = crate::simplify::SimplifySettings {
     target_triangles: 2000,
@@ -763,18 +790,21 @@ fn spheres() -> Scene {
             specular: 1.0,
             ..Default::default()
         },
+        // Measured metals: the exact Fresnel of their complex index (Heidrich §8.3.1).
         Material {
             name: "gold_rough".into(),
-            base_color: Vec4::new(1.0, 0.78, 0.34, 1.0),
+            base_color: Vec4::ONE,
             metallic: 1.0,
             roughness: 0.4,
+            conductor: Conductor::preset("gold"),
             ..Default::default()
         },
         Material {
             name: "silver_polished".into(),
-            base_color: Vec4::new(0.95, 0.93, 0.88, 1.0),
+            base_color: Vec4::ONE,
             metallic: 1.0,
             roughness: 0.08,
+            conductor: Conductor::preset("silver"),
             ..Default::default()
         },
     ];
@@ -810,6 +840,8 @@ fn spheres() -> Scene {
                 roughness: 0.0,
                 specular_transmission: 1.0,
                 ior: 1.5,
+                // A solid ball (KHR_materials_volume), not a thin-walled bubble.
+                thickness: 0.9,
                 ..Default::default()
             },
             -1.1,
@@ -818,9 +850,10 @@ fn spheres() -> Scene {
             "mirror",
             Material {
                 name: "chrome_mirror".into(),
-                base_color: Vec4::new(0.9, 0.9, 0.92, 1.0),
+                base_color: Vec4::ONE,
                 metallic: 1.0,
                 roughness: 0.0,
+                conductor: Conductor::preset("chrome"),
                 ..Default::default()
             },
             1.1,
@@ -832,15 +865,21 @@ fn spheres() -> Scene {
             Mat4::from_translation(Vec3::new(x, 0.45, -1.5)),
         );
     }
+    // A normal-mapped glossy torus: the environment on a bumpy surface (Heidrich §9.3).
+    let waves = s.textures.len();
+    s.textures.push(wave_normal_map());
     let green = s.add_material(Material {
-        name: "plastic_green".into(),
+        name: "plastic_green_waves".into(),
         base_color: Vec4::new(0.15, 0.5, 0.15, 1.0),
-        roughness: 0.45,
+        roughness: 0.3,
         specular: 1.0,
+        normal_texture: Some(TextureRef::new(waves, 0)),
         ..Default::default()
     });
+    let mut torus_mesh = torus("torus", 0.35, 0.12, 64, 24, green);
+    torus_mesh.compute_tangents();
     s.add_mesh(
-        torus("torus", 0.35, 0.12, 64, 24, green),
+        torus_mesh,
         Mat4::from_rotation_translation(Quat::from_rotation_x(0.4), Vec3::new(0.0, 0.3, 0.9)),
     );
     s.environment = Some(sky_env(
