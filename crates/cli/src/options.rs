@@ -252,6 +252,11 @@ pub struct RasterArgs {
     /// neighbours.
     #[arg(long)]
     pub dynamic_env: bool,
+    /// Whether the environment's sun casts shadows (on) or stays in the unshadowed ambient
+    /// (off): its bright region becomes a directional light with shadows for the diffuse term
+    /// of the Phong and LPV techniques (specular reflections keep it in the environment map).
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub env_sun: String,
     /// How glass (KHR_materials_transmission) refracts the environment: one interface, or two
     /// (in and out through the object's bounding sphere: exact for a ball).
     #[arg(long, default_value = "two")]
@@ -283,6 +288,7 @@ impl Default for RasterArgs {
             env_prefilter: EnvPrefilter::Auto,
             env_diffuse: EnvDiffuse::Sh,
             dynamic_env: false,
+            env_sun: "on".into(),
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
         }
@@ -330,6 +336,7 @@ impl RasterArgs {
             env_map: self.env_map,
             env_prefilter: self.env_prefilter,
             env_diffuse: self.env_diffuse,
+            env_sun: self.env_sun == "on",
             dynamic_env: self.dynamic_env,
             refraction: self.refraction,
             env_texels: self.env_texels,

@@ -193,9 +193,146 @@ pub fn irradiance_map(radiance: &[DVec3], width: u32) -> Image {
     })
 }
 
+/// A sun found in a lat-long environment: the compact bright region around its brightest
+/// texel, as a directional light, and the environment without it.
+#[derive(Clone, Debug)]
+pub struct EnvSun {
+    /// Unit direction towards the sun (world).
+    pub direction: Vec3,
+    /// Irradiance it gives a surface facing it: Σ L·Ω over its texels (RGB, before the
+    /// environment's intensity).
+    pub irradiance: Vec3,
+    /// Angular diameter of the disc of the same solid angle (radians).
+    pub angular_diameter: f32,
+    /// The environment with the sun's texels replaced by the sky around them.
+    pub remainder: Image,
+    /// The fraction of the environment's total power (luminance) the sun carries.
+    pub share: f32,
+}
+
+/// Extract a sun from a lat-long environment (for renderers that shadow a directional light but
+/// not their ambient term). The brightest texel must exceed `min_ratio` × the sphere's mean
+/// luminance; the sun is then the texels within 20° of it brighter than twice the sky just
+/// outside (the mean of a 20–30° ring), less that sky, which stays behind in the remainder.
+/// None when no texel is that bright (an overcast sky) or the sun carries under 1 % of the
+/// environment's power.
+pub fn extract_sun(img: &Image, min_ratio: f32) -> Option<EnvSun> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    if EnvFormat::LatLong.check(img.width, img.height).is_err() {
+        return None;
+    }
+    let lum = |c: Vec3| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    let mut texels = Vec::with_capacity(w * h);
+    for_each_texel(img, EnvFormat::LatLong, |d, omega, c| {
+        texels.push((d.as_vec3(), omega as f32, c))
+    });
+    let total: f64 = texels.iter().map(|t| (lum(t.2) * t.1) as f64).sum();
+    let mean = (total / (4.0 * std::f64::consts::PI)) as f32;
+    let (peak_i, peak) = texels
+        .iter()
+        .enumerate()
+        .map(|(i, t)| (i, lum(t.2)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    if !(peak > min_ratio * mean && mean > 0.0) {
+        return None;
+    }
+    let centre = texels[peak_i].0;
+    let (cos_in, cos_ring) = (20f32.to_radians().cos(), 30f32.to_radians().cos());
+    let (mut ring, mut ring_w) = (Vec3::ZERO, 0.0f32);
+    for t in &texels {
+        let c = t.0.dot(centre);
+        if c < cos_in && c >= cos_ring {
+            ring += t.2 * t.1;
+            ring_w += t.1;
+        }
+    }
+    let background = if ring_w > 0.0 {
+        ring / ring_w
+    } else {
+        Vec3::ZERO
+    };
+    let threshold = 2.0 * lum(background);
+    let is_sun = |t: &(Vec3, f32, Vec3)| t.0.dot(centre) >= cos_in && lum(t.2) > threshold;
+    let (mut irradiance, mut dir, mut omega) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
+    let mut remainder = img.clone();
+    for (i, t) in texels.iter().enumerate() {
+        if is_sun(t) {
+            // What the sun adds over the sky behind it.
+            let excess = (t.2 - background).max(Vec3::ZERO);
+            irradiance += excess * t.1;
+            dir += t.0 * lum(excess) * t.1;
+            omega += t.1;
+            remainder.data[i] = t.2 - excess;
+        }
+    }
+    let share = (lum(irradiance) as f64 / total) as f32;
+    if share < 0.01 || dir == Vec3::ZERO {
+        return None;
+    }
+    // Ω = 2π(1 − cos r) for a disc of angular radius r.
+    let r = (1.0 - omega / std::f32::consts::TAU)
+        .clamp(-1.0, 1.0)
+        .acos();
+    Some(EnvSun {
+        direction: dir.normalize(),
+        irradiance,
+        angular_diameter: 2.0 * r,
+        remainder,
+        share,
+    })
+}
+
 #[cfg(test)]
 mod small_map_tests {
     use super::*;
+
+    /// A sky of constant radiance 0.5 with a disc of radiance 500 and radius 2° around a
+    /// known direction: the sun comes out at that direction with the disc's excess
+    /// irradiance, and the remainder is the plain sky.
+    #[test]
+    fn a_sun_disc_is_extracted_and_the_sky_stays() {
+        let sun_dir = Vec3::new(0.4, 0.7, -0.3).normalize();
+        let r = 2f32.to_radians();
+        let (w, h) = (1024u32, 512u32);
+        let mut img = Image::new(w, h);
+        let mut disc = 0.0f64;
+        for y in 0..h {
+            for x in 0..w {
+                let uv = Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+                let d = latlong_uv_to_dir(uv);
+                let inside = d.dot(sun_dir) >= r.cos();
+                img.data[(y * w + x) as usize] = Vec3::splat(if inside { 500.0 } else { 0.5 });
+                if inside {
+                    disc += Param::LatLong.texel_solid_angle(0, y, w, h);
+                }
+            }
+        }
+        let sun = extract_sun(&img, 20.0).expect("a sun");
+        assert!(
+            sun.direction.dot(sun_dir) > 0.2f32.to_radians().cos(),
+            "{}",
+            sun.direction
+        );
+        let expect = 499.5 * disc as f32;
+        assert!(
+            (sun.irradiance.x - expect).abs() < 0.01 * expect,
+            "{} vs {expect}",
+            sun.irradiance
+        );
+        assert!(
+            (sun.angular_diameter - 2.0 * r).abs() < 0.1 * r,
+            "{}",
+            sun.angular_diameter
+        );
+        assert!(sun.remainder.data.iter().all(|c| (c.x - 0.5).abs() < 1e-4));
+        // An overcast sky has no sun.
+        let flat = Image {
+            width: w,
+            height: h,
+            data: vec![Vec3::splat(0.5); (w * h) as usize],
+        };
+        assert!(extract_sun(&flat, 20.0).is_none());
+    }
 
     /// Every (size, format) either is refused by `check` or projects a constant map to its
     /// exact L00 = √(4π) within 5 %: no panic on small or mis-shaped images.

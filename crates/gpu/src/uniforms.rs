@@ -94,7 +94,8 @@ pub struct GpuLight {
     pub attenuation: u32,
     pub shadow_first: u32,
     pub shadow_count: u32,
-    pub _pad0: u32,
+    /// 1: the diffuse term only (the environment's sun).
+    pub diffuse_only: u32,
     pub _pad1: u32,
     pub cascade_ends: [f32; 4],
     pub edge_u: [f32; 3],
@@ -237,7 +238,7 @@ mod tests {
                     attenuation,
                     shadow_first,
                     shadow_count,
-                    _pad0,
+                    diffuse_only,
                     _pad1,
                     cascade_ends,
                     edge_u,

@@ -1,7 +1,7 @@
 //! Building a [`Renderer`]: checked settings, the camera, the light-map page layout, the
 //! lights and their shadow views, uniforms, pipelines, targets and bind groups.
 
-use super::ambient::{AmbientSource, LightmapInput, page_layout, sh_irradiance};
+use super::ambient::{AmbientSource, LightmapInput, environment_sun, page_layout, sh_irradiance};
 use super::bindings::{GroupLayouts, PipelineLayouts, entry};
 use super::light_set::LightSet;
 use super::pipelines::Pipelines;
@@ -114,6 +114,7 @@ fn frame_uniforms(
     s: &RasterSettings,
     camera: &Camera,
     lights: usize,
+    sun: Option<&lightlab_core::sh_env::EnvSun>,
 ) -> FrameUniforms {
     let aspect = s.width as f32 / s.height as f32;
     let view = camera.transform.inverse();
@@ -133,7 +134,7 @@ fn frame_uniforms(
             ShadowMethod::MapLinear => 2,
             _ => 0,
         },
-        ambient_sh: sh_irradiance(scene, s.ambient),
+        ambient_sh: sh_irradiance(scene, s.ambient, sun),
         pcf_radius: s.pcf_radius,
         normal_offset: s.normal_offset,
         linear_bias: s.linear_bias,
@@ -311,8 +312,24 @@ impl Renderer {
         // A light-map holds the emitters' light already; SH transfer is lit by its SH light only.
         let area_lights =
             s.area_lights && matches!(ambient, AmbientInput::None | AmbientInput::Lpv(..));
-        let ls = LightSet::new(scene, s, &camera, gscene.bounds, area_lights);
-        let frame = frame_uniforms(scene, s, &camera, ls.light_pos.len());
+        let sun = (s.env_sun && matches!(ambient, AmbientInput::None | AmbientInput::Lpv(..)))
+            .then(|| environment_sun(scene, s.ambient))
+            .flatten();
+        let ls = LightSet::new(
+            scene,
+            s,
+            &camera,
+            gscene.bounds,
+            area_lights,
+            sun.as_ref().map(|(l, _)| l),
+        );
+        let frame = frame_uniforms(
+            scene,
+            s,
+            &camera,
+            ls.light_pos.len(),
+            sun.as_ref().map(|(_, e)| e),
+        );
         let buffers = FrameBuffers::new(device, &frame, &ls);
         let kind = source.kind();
         let layouts = GroupLayouts::new(device, &kind.layout_entries());

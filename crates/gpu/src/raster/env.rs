@@ -407,15 +407,19 @@ pub fn dynamic(
         r.set_camera(ctx, cam.clone());
         r.render(ctx);
         faces.push(r.read_hdr(ctx)?);
-        // Camera-relative positions, w = 0 where nothing was drawn (the sky: far away).
+        // Camera-relative positions, w = 0 where nothing was drawn (the sky: infinitely far).
+        // The map holds inverse distances: filtering across an edge between a near object and
+        // the sky then blends to a finite distance near the object's, where blended distances
+        // put the edge's texels halfway to infinity (a bright band of sky reflected at the
+        // floor's far edge, a stepped outline at the box's).
         let g = r.read_gbuffer(ctx)?;
         depths.push(
             g[3].iter()
                 .map(|p| {
                     if p[3] > 0.0 {
-                        Vec3::new(p[0], p[1], p[2]).length()
+                        1.0 / Vec3::new(p[0], p[1], p[2]).length().max(1e-4)
                     } else {
-                        1e4
+                        0.0
                     }
                 })
                 .collect::<Vec<f32>>(),

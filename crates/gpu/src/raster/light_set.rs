@@ -53,7 +53,11 @@ fn dominant_floor(scene: &Scene) -> Option<Vec4> {
 /// The scene's lights, then (when `area_lights`) its planar emitters: each a point light at
 /// the emitter's centre, moved off it along its normal, for the shadows, and a Lambertian
 /// rectangle for the shading (kind 3).
-fn sources(scene: &Scene, area_lights: bool) -> Vec<(Light, Option<(PlanarEmitter, f32)>)> {
+fn sources(
+    scene: &Scene,
+    area_lights: bool,
+    sun: Option<&Light>,
+) -> Vec<(Light, Option<(PlanarEmitter, f32)>)> {
     let mut sources: Vec<_> = scene.lights.iter().map(|l| (l.clone(), None)).collect();
     if area_lights {
         for e in scene.planar_emitters().into_iter().take(MAX_AREA_LIGHTS) {
@@ -70,6 +74,8 @@ fn sources(scene: &Scene, area_lights: bool) -> Vec<(Light, Option<(PlanarEmitte
             sources.push((l, Some((e, offset))));
         }
     }
+    // The environment's sun last: `LightSet::new` marks it diffuse-only.
+    sources.extend(sun.map(|l| (l.clone(), None)));
     sources
 }
 
@@ -82,6 +88,7 @@ impl LightSet {
         camera: &Camera,
         bounds: (Vec3, Vec3),
         area_lights: bool,
+        sun: Option<&Light>,
     ) -> LightSet {
         let plane = match s.shadows {
             ShadowMethod::Planar => s.planar_plane.or_else(|| dominant_floor(scene)),
@@ -96,13 +103,16 @@ impl LightSet {
             planar: vec![],
             plane,
         };
-        for (li, (l, area)) in sources(scene, area_lights).iter().enumerate() {
+        let sources = sources(scene, area_lights, sun);
+        let sun_index = sun.map(|_| sources.len() - 1);
+        for (li, (l, area)) in sources.iter().enumerate() {
             let radius = match area {
                 None => lights::light_radius(l, s.attenuation, s.light_radius),
                 // Area lights fall off physically (their exact irradiance): never culled.
                 Some(_) => None,
             };
             let mut g = lights::gpu_light(l, s.attenuation, radius);
+            g.diffuse_only = (Some(li) == sun_index) as u32;
             if let Some((e, offset)) = area {
                 g.kind = 3;
                 g.attenuation = 0;

@@ -201,6 +201,10 @@ pub struct RasterSettings {
     /// Dynamic environment maps: the scene rendered into a cube at the centre of its most
     /// mirror-like object, which then reflects its neighbours (`raster::env::dynamic`).
     pub dynamic_env: bool,
+    /// Shadow the environment's sun: its bright region becomes a shadow-casting directional
+    /// light for the diffuse term and leaves the SH ambient (`lightlab_core::sh_env::extract_sun`;
+    /// the Phong and LPV techniques, `ambient` = the environment).
+    pub env_sun: bool,
     pub refraction: Refraction,
     /// Texels of the environment map's level 0 over all faces (equal memory across
     /// parameterisations).
@@ -235,6 +239,7 @@ impl Default for RasterSettings {
             env_prefilter: EnvPrefilter::Auto,
             env_diffuse: EnvDiffuse::Sh,
             dynamic_env: false,
+            env_sun: true,
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
         }

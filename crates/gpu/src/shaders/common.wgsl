@@ -87,7 +87,9 @@ struct GpuLight {
     // First shadow view of this light and how many (spot 1, point 6, directional cascades).
     shadow_first: u32,
     shadow_count: u32,
-    _pad0: u32,
+    // 1: lights the diffuse term only (the environment's sun, whose specular part the
+    // environment map holds).
+    diffuse_only: u32,
     _pad1: u32,
     // View-space distances ending the cascades of a directional light.
     cascade_ends: vec4<f32>,
@@ -463,7 +465,11 @@ fn shade_light(s: Surface, li: GpuLight, v: vec3<f32>) -> vec3<f32> {
     let ngl = dot(s.ng, l);
     var c = vec3<f32>(0.0);
     if ngl > 0.0 {
-        c = brdf_cos(s, v, l);
+        // The environment's sun lights the diffuse term only (`select`: no branch on the
+        // light's flag around the BRDF; see env.wgsl on lavapipe).
+        let nl = max(dot(s.n, l), 0.0);
+        let diffuse = select(vec3<f32>(0.0), diffuse_coef(s, dot(s.n, v)) * nl, dot(s.n, v) > 0.0);
+        c = select(brdf_cos(s, v, l), diffuse, li.diffuse_only != 0u);
     } else if s.transmission > 0.0 {
         // Thin diffuse transmission: light from behind leaves towards the viewer.
         c = s.diffuse * (s.transmission / PI) * max(-dot(s.n, l), 0.0);

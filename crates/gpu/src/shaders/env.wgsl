@@ -179,18 +179,61 @@ fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32, base: u32
 }
 
 // Distance impostors (Szirmay-Kalos et al. 2005): the direction from the dynamic map's centre
-// c to where the ray p + t·r meets the surroundings, found by three fixed-point steps on the
-// distance map (a map seen from c, looked up as if from p, shows near things misplaced).
+// c to where the ray p + t·r meets the surroundings. A map seen from c, looked up as if from p,
+// shows near things misplaced. The ray is searched on a geometric ladder of distances for the
+// first point beyond the surface the distance map records in its direction, then refined by
+// two secant steps; no crossing means the sky (direction r). Fixed-point steps from the
+// centre's view fail where that view sees the sky and p's ray meets something near (a floor's
+// far edge).
+const ENV_MARCH_STEPS: u32 = 32u;
+fn env_map_distance(d: vec3<f32>) -> f32 {
+    let m = normalize(vec3<f32>(dot(env_u.row0.xyz, d), dot(env_u.row1.xyz, d), dot(env_u.row2.xyz, d)));
+    // The map holds inverse distances (0: the sky).
+    return 1.0 / max(env_read(env_u.dyn_distance_base, 0u, 0u, m, 0.0).r, 1e-4);
+}
+
+// How far beyond the recorded surface p + t·r lies (> 0: behind it).
+fn env_beyond(p: vec3<f32>, r: vec3<f32>, t: f32) -> f32 {
+    let x = p + r * t - env_u.dyn_centre.xyz;
+    return length(x) - env_map_distance(safe_normalize(x, r));
+}
+
 fn env_parallax(p: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
     let c = env_u.dyn_centre.xyz;
-    var d = r;
-    for (var i = 0u; i < 3u; i++) {
-        let m = normalize(vec3<f32>(dot(env_u.row0.xyz, d), dot(env_u.row1.xyz, d), dot(env_u.row2.xyz, d)));
-        let dist = env_read(env_u.dyn_distance_base, 0u, 0u, m, 0.0).r;
-        let t = max(dot(c + d * dist - p, r), 0.0);
-        d = safe_normalize(p + r * t - c, r);
+    var t0 = 0.0;
+    var f0 = env_beyond(p, r, 0.0);
+    var t1 = 0.0;
+    var f1 = f0;
+    var hit = false;
+    for (var i = 0u; i < ENV_MARCH_STEPS; i++) {
+        // 0.01 to 1000 scene units, a factor 1.45 a step.
+        let t = 0.01 * pow(1e5, f32(i) / f32(ENV_MARCH_STEPS - 1u));
+        let f = env_beyond(p, r, t);
+        if f >= 0.0 && f0 < 0.0 {
+            t1 = t;
+            f1 = f;
+            hit = true;
+            break;
+        }
+        t0 = t;
+        f0 = f;
     }
-    return d;
+    if !hit {
+        return r;
+    }
+    for (var k = 0u; k < 4u; k++) {
+        let t = t0 + (t1 - t0) * (-f0) / max(f1 - f0, 1e-6);
+        let f = env_beyond(p, r, t);
+        if f >= 0.0 {
+            t1 = t;
+            f1 = f;
+        } else {
+            t0 = t;
+            f0 = f;
+        }
+    }
+    let t = t0 + (t1 - t0) * (-f0) / max(f1 - f0, 1e-6);
+    return safe_normalize(p + r * t - c, r);
 }
 
 // The second interface (Heidrich §8.3.3, two interfaces): the refracted ray t crosses the

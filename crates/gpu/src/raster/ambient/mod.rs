@@ -246,7 +246,43 @@ fn upload_lightmaps(
 }
 
 /// The ambient light as 9 SH coefficients of irradiance.
-pub(super) fn sh_irradiance(scene: &Scene, ambient: Ambient) -> [[f32; 4]; 9] {
+/// The environment's sun as a directional light, and the environment without it
+/// (`RasterSettings::env_sun`); None without an environment ambient or a sun in it.
+pub(super) fn environment_sun(
+    scene: &Scene,
+    ambient: Ambient,
+) -> Option<(lightlab_scene::Light, lightlab_core::sh_env::EnvSun)> {
+    let env = scene
+        .environment
+        .as_ref()
+        .filter(|_| ambient == Ambient::Environment)?;
+    let sun = lightlab_core::sh_env::extract_sun(&env.image, SUN_MIN_RATIO)?;
+    let e = sun.irradiance * env.intensity;
+    let peak = e.max_element();
+    let light = lightlab_scene::Light {
+        name: "environment sun".into(),
+        kind: lightlab_scene::LightKind::Directional {
+            angular_diameter: sun.angular_diameter,
+        },
+        color: e / peak,
+        intensity: peak,
+        position: glam::Vec3::ZERO,
+        direction: -sun.direction,
+        range: None,
+    };
+    Some((light, sun))
+}
+
+/// How much brighter than the sphere's mean radiance a texel must be to belong to a sun.
+const SUN_MIN_RATIO: f32 = 20.0;
+
+/// The ambient term's nine SH irradiance coefficients: of the environment (without its sun
+/// when `sun` took it out), of a constant sky, or none.
+pub(super) fn sh_irradiance(
+    scene: &Scene,
+    ambient: Ambient,
+    sun: Option<&lightlab_core::sh_env::EnvSun>,
+) -> [[f32; 4]; 9] {
     let mut out = [[0.0; 4]; 9];
     match ambient {
         Ambient::None => {}
@@ -258,7 +294,7 @@ pub(super) fn sh_irradiance(scene: &Scene, ambient: Ambient) -> [[f32; 4]; 9] {
         Ambient::Environment => {
             if let Some(env) = &scene.environment {
                 let l = lightlab_core::sh_env::project_env(
-                    &env.image,
+                    sun.map_or(&env.image, |s| &s.remainder),
                     lightlab_core::sh_env::EnvFormat::LatLong,
                     3,
                 );
