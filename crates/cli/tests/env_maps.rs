@@ -351,6 +351,13 @@ fn fresnel_weighted_reflections_follow_the_index_of_refraction() {
         let img = Image::read(&gpu).unwrap();
         means.push(img.data.iter().map(|c| c.x as f64).sum::<f64>() / img.data.len() as f64);
         eprintln!("Fresnel ior {ior}, roughness {roughness}: relMSE {e:.4}");
+        // Heidrich's Fig 8.8 as images: LIGHTLAB_KEEP=DIR keeps each pair.
+        if let Ok(keep) = std::env::var("LIGHTLAB_KEEP") {
+            for (f, what) in [(&gpu, "gpu"), (&reference, "ref")] {
+                let to = format!("fig8.8-ior{ior}-r{roughness}-{what}.exr");
+                let _ = std::fs::copy(f, Path::new(&keep).join(to));
+            }
+        }
         assert!(e <= 0.01, "ior {ior} roughness {roughness}: relMSE {e}");
     }
     // More of the environment is reflected as the index grows.

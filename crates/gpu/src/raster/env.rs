@@ -142,7 +142,38 @@ pub fn prefiltered(scene: &Scene, s: &RasterSettings, camera: &Camera) -> Option
         return None;
     }
     let settings = env_settings(scene, s, camera)?;
-    Some(envmap::prefilter(&env.image, env.intensity, &settings))
+    // With the environment's sun shadowed as a light (`--env-sun`), the irradiance map holds
+    // the sky without it, as the SH coefficients do; the specular levels keep it.
+    let sun = settings
+        .irradiance
+        .then(|| {
+            s.env_sun
+                .then(|| super::ambient::environment_sun(scene, s.ambient))
+        })
+        .flatten()
+        .flatten();
+    let Some((_, sun)) = sun else {
+        return Some(envmap::prefilter(&env.image, env.intensity, &settings));
+    };
+    let mut maps = envmap::prefilter(
+        &env.image,
+        env.intensity,
+        &EnvSettings {
+            irradiance: false,
+            ..settings.clone()
+        },
+    );
+    let irradiance = envmap::prefilter(
+        &sun.remainder,
+        env.intensity,
+        &EnvSettings {
+            lobes: vec![],
+            ..settings
+        },
+    );
+    maps.layers.extend(irradiance.layers);
+    maps.irradiance = true;
+    Some(maps)
 }
 
 /// The maps' parameterisation, frame, size, levels and lobes for `s`; None when nothing needs

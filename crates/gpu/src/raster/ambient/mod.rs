@@ -247,7 +247,9 @@ fn upload_lightmaps(
 
 /// The ambient light as 9 SH coefficients of irradiance.
 /// The environment's sun as a directional light, and the environment without it
-/// (`RasterSettings::env_sun`); None without an environment ambient or a sun in it.
+/// (`RasterSettings::env_sun`); None without an environment ambient or a sun in it, and when
+/// the scene has a directional light of its own (a sky made with its sun apart, as lightlab's
+/// daylight is, whose brightest region is then the sun's aureole, not the sun).
 pub(super) fn environment_sun(
     scene: &Scene,
     ambient: Ambient,
@@ -256,6 +258,13 @@ pub(super) fn environment_sun(
         .environment
         .as_ref()
         .filter(|_| ambient == Ambient::Environment)?;
+    if scene
+        .lights
+        .iter()
+        .any(|l| matches!(l.kind, lightlab_scene::LightKind::Directional { .. }))
+    {
+        return None;
+    }
     let sun = lightlab_core::sh_env::extract_sun(&env.image, SUN_MIN_RATIO)?;
     let e = sun.irradiance * env.intensity;
     let peak = e.max_element();
