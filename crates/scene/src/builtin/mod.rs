@@ -644,6 +644,29 @@ fn bush() -> Scene {
     s
 }
 
+/// An n² tangent-space normal map (linear; xyz·½ + ½) of a height field over the unit tile,
+/// in tile units, by central differences.
+fn normal_map_from_height(name: &str, n: u32, height: impl Fn(f32, f32) -> f32) -> Texture {
+    let e = 0.5 / n as f32;
+    let data = (0..n * n)
+        .map(|k| {
+            let (x, y) = (k % n, k / n);
+            let (u, v) = ((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
+            let du = (height(u + e, v) - height(u - e, v)) / (2.0 * e);
+            let dv = (height(u, v + e) - height(u, v - e)) / (2.0 * e);
+            let nrm = Vec3::new(-du, -dv, 1.0).normalize();
+            (nrm * 0.5 + Vec3::splat(0.5)).extend(1.0)
+        })
+        .collect();
+    Texture {
+        name: name.into(),
+        width: n,
+        height: n,
+        texels: crate::Texels::Rgba32F(data),
+        srgb: false,
+    }
+}
+
 /// Dune-map repeats per metre on the `prt` ground.
 const DUNE_TILES_PER_METRE: f32 = 0.5;
 
@@ -661,24 +684,7 @@ fn dune_normal_map() -> Texture {
         let ripple = ripple_phase.sin() + 0.35 * (2.0 * ripple_phase).sin();
         0.045 * ridge + 0.007 * ripple
     };
-    let e = 0.5 / n as f32;
-    let data = (0..n * n)
-        .map(|k| {
-            let (x, y) = (k % n, k / n);
-            let (u, v) = ((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
-            let du = (height(u + e, v) - height(u - e, v)) / (2.0 * e);
-            let dv = (height(u, v + e) - height(u, v - e)) / (2.0 * e);
-            let nrm = Vec3::new(-du, -dv, 1.0).normalize();
-            (nrm * 0.5 + Vec3::splat(0.5)).extend(1.0)
-        })
-        .collect();
-    Texture {
-        name: "dunes_normal".into(),
-        width: n,
-        height: n,
-        texels: crate::Texels::Rgba32F(data),
-        srgb: false,
-    }
+    normal_map_from_height("dunes_normal", n, height)
 }
 
 /// A 128² tangent-space normal map of crossing waves (linear; xyz·½ + ½), periodic in the
@@ -688,24 +694,7 @@ fn wave_normal_map() -> Texture {
     let n = 128u32;
     let height =
         |u: f32, v: f32| 0.025 * ((TAU * (2.0 * u + v)).sin() + 0.6 * (TAU * 3.0 * v).sin());
-    let e = 0.5 / n as f32;
-    let data = (0..n * n)
-        .map(|k| {
-            let (x, y) = (k % n, k / n);
-            let (u, v) = ((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
-            let du = (height(u + e, v) - height(u - e, v)) / (2.0 * e);
-            let dv = (height(u, v + e) - height(u, v - e)) / (2.0 * e);
-            let nrm = Vec3::new(-du, -dv, 1.0).normalize();
-            (nrm * 0.5 + Vec3::splat(0.5)).extend(1.0)
-        })
-        .collect();
-    Texture {
-        name: "waves_normal".into(),
-        width: n,
-        height: n,
-        texels: crate::Texels::Rgba32F(data),
-        srgb: false,
-    }
+    normal_map_from_height("waves_normal", n, height)
 }
 
 /// How the `prt` scene's decimated knot is made from the high-poly one.
