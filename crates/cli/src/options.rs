@@ -210,8 +210,12 @@ pub struct RasterArgs {
     /// Light-map sampling of `lightmap` and `lightmap+phong`: bilinear or bicubic.
     #[arg(long, default_value = "bilinear")]
     pub lightmap_filter: Filter,
-    /// Ambient term: `env` (the scene's environment as 9 SH coefficients), `none`, or a
-    /// constant sky radiance `r,g,b`.
+    /// Ambient term: `env` (the scene's environment), `none`, or a constant sky radiance
+    /// `r,g,b`. What `env` lights: the Phong techniques and the LPVs' direct part take the
+    /// environment's diffuse light as 9 unshadowed SH coefficients (or `--env-diffuse map`),
+    /// less its sun, which `--env-sun` turns into a shadowed light; the light-map techniques
+    /// take it from the bake (shadowed); the SH and PRT techniques through their transfer
+    /// (shadowed). Every GPU technique adds the specular environment term (`--env-map`).
     #[arg(long, default_value = "env")]
     pub ambient: Ambient,
     /// Shadow-map resolution (per layer).
