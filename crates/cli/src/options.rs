@@ -251,9 +251,9 @@ pub struct RasterArgs {
     /// irradiance) or map (an irradiance map, Heidrich Eq 8.13).
     #[arg(long, default_value = "sh")]
     pub env_diffuse: EnvDiffuse,
-    /// Dynamic environment maps: render the scene into a cube at the centre of its most
-    /// mirror-like object (metallic or glass, roughness under 0.3), which then reflects its
-    /// neighbours.
+    /// Dynamic environment maps: render the scene into a cube at the centre of each of its
+    /// (up to four) mirror-like objects (metallic or glass, roughness under 0.3), which then
+    /// reflect their neighbours.
     #[arg(long)]
     pub dynamic_env: bool,
     /// Whether the environment's sun casts shadows (on) or stays in the unshadowed ambient

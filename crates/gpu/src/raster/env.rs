@@ -49,20 +49,29 @@ pub struct EnvUniforms {
     pub specular: u32,
     /// The irradiance map's first layer; u32::MAX without one.
     pub irradiance_layer: u32,
-    /// The scene instance that reflects the dynamic maps (u32::MAX: none), and where their
-    /// layers start (they follow the static ones, in the same layout).
-    pub dynamic_instance: u32,
-    pub dynamic_base: u32,
-    /// The dynamic maps' distance layers (distance from their centre, in red; mirror level).
-    pub dyn_distance_base: u32,
+    /// How many instances have dynamic maps (their layers follow the static ones, in the
+    /// same layout; [`EnvInstance`] says where).
+    pub dynamic_objects: u32,
+    pub pad0: u32,
+    pub pad1: u32,
     /// 1: glass refracts through one interface; 2: through two (the instance's bounding
     /// sphere).
     pub refraction: u32,
-    pub pad1: u32,
     pub pad2: u32,
-    /// The dynamic maps' centre; w = 1 when they have distances.
-    pub dyn_centre: [f32; 4],
+    pub pad3: u32,
 }
+
+/// Per scene instance (WGSL `EnvInstance`, binding 24): its bounding sphere and its dynamic
+/// maps' first colour layer, first inverse-distance layer and whether it has them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct EnvInstance {
+    pub sphere: [f32; 4],
+    pub dynamic: [u32; 4],
+}
+
+/// At most this many objects get dynamic maps (each costs six renders and a CPU prefilter).
+pub const MAX_DYNAMIC_OBJECTS: usize = 4;
 
 /// Group 2's entries of the term.
 pub(super) fn layout_entries() -> Vec<LayoutEntry> {
@@ -229,20 +238,24 @@ impl EnvResources {
             .as_ref()
             .filter(|m| m.irradiance)
             .map_or(u32::MAX, |m| (m.layers.len() - m.faces()) as u32);
-        u.dynamic_instance = u32::MAX;
-        if let (Some(m), true) = (maps.as_mut(), s.dynamic_env)
-            && let Some(i) = dynamic_instance(scene)
-        {
-            match dynamic(ctx, scene, s, i, m) {
-                Ok(d) => {
-                    u.dynamic_instance = i as u32;
-                    u.dynamic_base = m.layers.len() as u32;
-                    m.layers.extend(d.layers);
-                    u.dyn_distance_base = m.layers.len() as u32;
-                    m.layers.extend(d.distance);
-                    u.dyn_centre = d.centre.extend(1.0).to_array();
+        let mut instances: Vec<EnvInstance> = (0..scene.instances.len().max(1))
+            .map(|i| EnvInstance {
+                sphere: bounding_sphere(scene, i),
+                dynamic: [0; 4],
+            })
+            .collect();
+        if let (Some(m), true) = (maps.as_mut(), s.dynamic_env) {
+            for i in dynamic_instances(scene) {
+                match dynamic(ctx, scene, s, i, m) {
+                    Ok(d) => {
+                        let colour = m.layers.len() as u32;
+                        m.layers.extend(d.layers);
+                        instances[i].dynamic = [colour, m.layers.len() as u32, 1, 0];
+                        m.layers.extend(d.distance);
+                        u.dynamic_objects += 1;
+                    }
+                    Err(e) => eprintln!("warning: no dynamic environment map: {e}"),
                 }
-                Err(e) => eprintln!("warning: no dynamic environment map: {e}"),
             }
         }
         if let Some(m) = &maps {
@@ -305,12 +318,9 @@ impl EnvResources {
             contents: bytemuck::bytes_of(&u),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let spheres: Vec<[f32; 4]> = (0..scene.instances.len().max(1))
-            .map(|i| bounding_sphere(scene, i))
-            .collect();
         let spheres = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("instance spheres"),
-            contents: bytemuck::cast_slice(&spheres),
+            label: Some("environment instances"),
+            contents: bytemuck::cast_slice(&instances),
             usage: wgpu::BufferUsages::STORAGE,
         });
         EnvResources {
@@ -353,30 +363,35 @@ fn bounding_sphere(scene: &Scene, i: usize) -> [f32; 4] {
     [c.x, c.y, c.z, r]
 }
 
-/// The instance whose surroundings matter most in its reflection: the smoothest of the
-/// mirror-like ones (metallic or glass, roughness under 0.3); None when there is none.
-pub fn dynamic_instance(scene: &Scene) -> Option<usize> {
+/// The instances whose surroundings matter most in their reflections, most first: the
+/// mirror-like ones (metallic or glass, roughness under 0.3), smoothest metals first; at most
+/// [`MAX_DYNAMIC_OBJECTS`].
+pub fn dynamic_instances(scene: &Scene) -> Vec<usize> {
     let score = |i: usize| {
         let m = &scene.materials[scene.meshes[scene.instances[i].mesh].material];
         // Metal mirrors first: glass shows more of what is behind it than what is around it.
         let mirror = m.metallic.max(0.9 * m.specular_transmission);
         (mirror >= 0.5 && m.roughness < 0.3).then_some(m.roughness - mirror)
     };
-    (0..scene.instances.len())
+    let mut found: Vec<(usize, f32)> = (0..scene.instances.len())
         .filter_map(|i| score(i).map(|s| (i, s)))
-        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .collect();
+    found.sort_by(|a, b| a.1.total_cmp(&b.1));
+    found
+        .into_iter()
+        .take(MAX_DYNAMIC_OBJECTS)
         .map(|(i, _)| i)
+        .collect()
 }
 
 /// Face size of the dynamic cube renders.
 const DYNAMIC_FACE: u32 = 128;
 
-/// The dynamic maps of one object: colour layers (the static maps' layout), distance layers
-/// (mirror level, distance from `centre` in every channel) and the centre.
+/// The dynamic maps of one object, centred on its bounding sphere's centre: colour layers (the
+/// static maps' layout) and inverse-distance layers (mirror level, in every channel).
 pub struct DynamicMaps {
     pub layers: Vec<Vec<Vec<glam::Vec3>>>,
     pub distance: Vec<Vec<Vec<glam::Vec3>>>,
-    pub centre: glam::Vec3,
 }
 
 /// Dynamic environment maps (issue 20): the scene around instance `i` rendered from its
@@ -496,7 +511,6 @@ pub fn dynamic(
     Ok(DynamicMaps {
         layers: envmap::prefilter(&latlong, 1.0, &settings).layers,
         distance: envmap::prefilter(&distance, 1.0, &distances).layers,
-        centre,
     })
 }
 
@@ -585,6 +599,25 @@ mod tests {
     use crate::layout::check_struct;
     use crate::rust_layout;
 
+    /// `spheres`: the chrome mirror, the polished silver and the clear glass get dynamic maps
+    /// (smoothest metals first); the rough gold and the plastics do not.
+    #[test]
+    fn the_mirror_like_objects_get_dynamic_maps() {
+        let scene = lightlab_scene::builtin::builtin("spheres").unwrap();
+        let names: Vec<&str> = dynamic_instances(&scene)
+            .into_iter()
+            .map(|i| {
+                scene.materials[scene.meshes[scene.instances[i].mesh].material]
+                    .name
+                    .as_str()
+            })
+            .collect();
+        assert_eq!(names, ["chrome_mirror", "silver_polished", "glass_clear"]);
+        let check = crate::raster::shader_source(crate::raster::SourceKind::Sky);
+        let layout = rust_layout!(EnvInstance, sphere, dynamic);
+        check_struct(check, "EnvInstance", &layout).unwrap_or_else(|e| panic!("{e}"));
+    }
+
     #[test]
     fn env_uniforms_match_the_wgsl_layout() {
         let src = crate::raster::shader_source(crate::raster::SourceKind::Sky);
@@ -605,13 +638,12 @@ mod tests {
             texel_angle,
             specular,
             irradiance_layer,
-            dynamic_instance,
-            dynamic_base,
-            dyn_distance_base,
-            refraction,
+            dynamic_objects,
+            pad0,
             pad1,
+            refraction,
             pad2,
-            dyn_centre
+            pad3
         );
         check_struct(src, "EnvUniforms", &layout).unwrap_or_else(|e| panic!("{e}"));
     }

@@ -198,8 +198,9 @@ pub struct RasterSettings {
     pub env_map: EnvMapKind,
     pub env_prefilter: EnvPrefilter,
     pub env_diffuse: EnvDiffuse,
-    /// Dynamic environment maps: the scene rendered into a cube at the centre of its most
-    /// mirror-like object, which then reflects its neighbours (`raster::env::dynamic`).
+    /// Dynamic environment maps: the scene rendered into a cube at the centre of each of its
+    /// (up to four) mirror-like objects, which then reflect their neighbours
+    /// (`raster::env::dynamic`).
     pub dynamic_env: bool,
     /// Shadow the environment's sun: its bright region becomes a shadow-casting directional
     /// light for the diffuse term and leaves the SH ambient (`lightlab_core::sh_env::extract_sun`;

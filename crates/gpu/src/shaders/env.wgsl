@@ -25,25 +25,29 @@ struct EnvUniforms {
     specular: u32,
     // The irradiance map's first layer (E/π); 0xffffffff without one.
     irradiance_layer: u32,
-    // The instance that reflects the dynamic maps (0xffffffff: none), and their first layer.
-    dynamic_instance: u32,
-    dynamic_base: u32,
-    // The dynamic maps' distance layers (distance from their centre in red, mirror level).
-    dyn_distance_base: u32,
+    // How many instances have dynamic maps (env_instances says which).
+    dynamic_objects: u32,
+    pad0: u32,
+    pad1: u32,
     // 1: glass refracts through one interface; 2: through two (the instance's bounding sphere).
     refraction: u32,
-    pad1: u32,
     pad2: u32,
-    // Their centre; w = 1 when they have distances.
-    dyn_centre: vec4<f32>,
+    pad3: u32,
+}
+
+// Per scene instance: its bounding sphere (centre, radius) and its dynamic maps (first colour
+// layer, first inverse-distance layer, 1 when it has them; they are centred on the sphere's
+// centre).
+struct EnvInstance {
+    sphere: vec4<f32>,
+    dynamic: vec4<u32>,
 }
 
 @group(2) @binding(20) var env_maps: texture_2d_array<f32>;
 @group(2) @binding(21) var env_sampler: sampler;
 @group(2) @binding(22) var env_lut: texture_2d<f32>;
 @group(2) @binding(23) var<uniform> env_u: EnvUniforms;
-// Per scene instance, its bounding sphere (centre, radius).
-@group(2) @binding(24) var<storage, read> env_spheres: array<vec4<f32>>;
+@group(2) @binding(24) var<storage, read> env_instances: array<EnvInstance>;
 
 // (face, u, v) of map direction m, as lightlab_core::param::Param::dir_to_uv.
 fn env_face_uv(m: vec3<f32>) -> vec3<f32> {
@@ -141,9 +145,13 @@ fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) 
     var out = vec3<f32>(0.0);
     // The dynamic maps' layers for their instance (a layer offset: no branch on it), and the
     // reflected direction corrected for the map's parallax.
-    let dynamic = (instance == env_u.dynamic_instance) & (env_u.dyn_centre.w > 0.0);
-    let base = select(0u, env_u.dynamic_base, dynamic);
-    let rd = select(r, env_parallax(s.p, r), dynamic);
+    let inst = env_instances[instance];
+    let dynamic = inst.dynamic.z != 0u;
+    let base = select(0u, inst.dynamic.x, dynamic);
+    var rd = r;
+    if dynamic {
+        rd = env_parallax(s.p, r, inst.sphere.xyz, inst.dynamic.y);
+    }
     let nv = dot(s.n, v);
     if env_u.specular != 0u {
         let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (nv > 0.0);
@@ -186,29 +194,29 @@ fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32, base: u32
 // centre's view fail where that view sees the sky and p's ray meets something near (a floor's
 // far edge).
 const ENV_MARCH_STEPS: u32 = 32u;
-fn env_map_distance(d: vec3<f32>) -> f32 {
+fn env_map_distance(d: vec3<f32>, layer: u32) -> f32 {
     let m = normalize(vec3<f32>(dot(env_u.row0.xyz, d), dot(env_u.row1.xyz, d), dot(env_u.row2.xyz, d)));
     // The map holds inverse distances (0: the sky).
-    return 1.0 / max(env_read(env_u.dyn_distance_base, 0u, 0u, m, 0.0).r, 1e-4);
+    return 1.0 / max(env_read(layer, 0u, 0u, m, 0.0).r, 1e-4);
 }
 
 // How far beyond the recorded surface p + t·r lies (> 0: behind it).
-fn env_beyond(p: vec3<f32>, r: vec3<f32>, t: f32) -> f32 {
-    let x = p + r * t - env_u.dyn_centre.xyz;
-    return length(x) - env_map_distance(safe_normalize(x, r));
+fn env_beyond(p: vec3<f32>, r: vec3<f32>, t: f32, c: vec3<f32>, layer: u32) -> f32 {
+    let x = p + r * t - c;
+    return length(x) - env_map_distance(safe_normalize(x, r), layer);
 }
 
-fn env_parallax(p: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
-    let c = env_u.dyn_centre.xyz;
+// The maps are centred on c; their inverse distances start at `layer`.
+fn env_parallax(p: vec3<f32>, r: vec3<f32>, c: vec3<f32>, layer: u32) -> vec3<f32> {
     var t0 = 0.0;
-    var f0 = env_beyond(p, r, 0.0);
+    var f0 = env_beyond(p, r, 0.0, c, layer);
     var t1 = 0.0;
     var f1 = f0;
     var hit = false;
     for (var i = 0u; i < ENV_MARCH_STEPS; i++) {
         // 0.01 to 1000 scene units, a factor 1.45 a step.
         let t = 0.01 * pow(1e5, f32(i) / f32(ENV_MARCH_STEPS - 1u));
-        let f = env_beyond(p, r, t);
+        let f = env_beyond(p, r, t, c, layer);
         if f >= 0.0 && f0 < 0.0 {
             t1 = t;
             f1 = f;
@@ -223,7 +231,7 @@ fn env_parallax(p: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
     }
     for (var k = 0u; k < 4u; k++) {
         let t = t0 + (t1 - t0) * (-f0) / max(f1 - f0, 1e-6);
-        let f = env_beyond(p, r, t);
+        let f = env_beyond(p, r, t, c, layer);
         if f >= 0.0 {
             t1 = t;
             f1 = f;
@@ -240,7 +248,7 @@ fn env_parallax(p: vec3<f32>, r: vec3<f32>) -> vec3<f32> {
 // instance's bounding sphere from s.p and refracts out there (total internal reflection:
 // reflected back in, and taken as leaving, a single bounce being all this follows).
 fn env_exit(s: Surface, t: vec3<f32>, instance: u32) -> vec3<f32> {
-    let sphere = env_spheres[instance];
+    let sphere = env_instances[instance].sphere;
     let c = sphere.xyz;
     let rr = sphere.w;
     // The far intersection of p + k·t with the sphere (p lies on or inside it).
