@@ -261,6 +261,10 @@ pub struct RasterArgs {
     /// of the Phong and LPV techniques (specular reflections keep it in the environment map).
     #[arg(long, default_value = "on", value_parser = ["on", "off"])]
     pub env_sun: String,
+    /// Sky directions whose shadow maps occlude the Phong techniques' diffuse sky light (the
+    /// scene seen from each; 0: the sky light is unshadowed).
+    #[arg(long, default_value_t = 64)]
+    pub sky_occlusion: u32,
     /// How glass (KHR_materials_transmission) refracts the environment: one interface, or two
     /// (in and out through the object's bounding sphere: exact for a ball).
     #[arg(long, default_value = "two")]
@@ -293,6 +297,7 @@ impl Default for RasterArgs {
             env_diffuse: EnvDiffuse::Sh,
             dynamic_env: false,
             env_sun: "on".into(),
+            sky_occlusion: 64,
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
         }
@@ -341,6 +346,7 @@ impl RasterArgs {
             env_prefilter: self.env_prefilter,
             env_diffuse: self.env_diffuse,
             env_sun: self.env_sun == "on",
+            sky_occlusion: self.sky_occlusion,
             dynamic_env: self.dynamic_env,
             refraction: self.refraction,
             env_texels: self.env_texels,

@@ -5,7 +5,7 @@ use super::ambient::{AmbientSource, LightmapInput, environment_sun, page_layout,
 use super::bindings::{GroupLayouts, PipelineLayouts, entry};
 use super::light_set::LightSet;
 use super::pipelines::Pipelines;
-use super::settings::{RasterError, RasterSettings, ShadowMethod, projection};
+use super::settings::{Ambient, RasterError, RasterSettings, ShadowMethod, projection};
 use super::targets::{
     ShadowArrays, ShadowMaps, Targets, env_texture, gbuffer_formats, renderable_or,
 };
@@ -109,6 +109,30 @@ impl FrameBuffers {
 }
 
 /// The frame uniforms: camera, shadow settings and the sky's SH irradiance.
+/// The `sky` source's occlusion: the sky's diffuse light (without the sun taken out of it, or
+/// a constant ambient's uniform sky) over `s.sky_occlusion` shadow-mapped directions.
+fn sky_occlusion(
+    ctx: &GpuContext,
+    scene: &Scene,
+    s: &RasterSettings,
+    gscene: &GpuScene,
+    sun: Option<&lightlab_core::sh_env::EnvSun>,
+) -> super::ambient::SkyOcclusion {
+    let uniform;
+    let env = match s.ambient {
+        Ambient::None => None,
+        Ambient::Constant(c) => {
+            uniform = lightlab_core::image::Image::from_fn(64, 32, |_, _| c);
+            Some((&uniform, 1.0))
+        }
+        Ambient::Environment => scene
+            .environment
+            .as_ref()
+            .map(|e| (sun.map_or(&e.image, |s| &s.remainder), e.intensity)),
+    };
+    super::ambient::SkyOcclusion::new(ctx, gscene, env, s.sky_occlusion)
+}
+
 fn frame_uniforms(
     scene: &Scene,
     s: &RasterSettings,
@@ -298,8 +322,17 @@ impl Renderer {
         let device = &ctx.device;
         let (page_size, rects) = page_layout(ambient.lightmap(), ambient.sh());
         let gscene = GpuScene::with_lightmap_uvs(device, &ctx.queue, scene, rects.as_deref());
+        let sun = (s.env_sun && matches!(ambient, AmbientInput::None | AmbientInput::Lpv(..)))
+            .then(|| environment_sun(scene, s.ambient))
+            .flatten();
         let source = match ambient {
-            AmbientInput::None => AmbientSource::Sky,
+            AmbientInput::None => AmbientSource::Sky(Box::new(sky_occlusion(
+                ctx,
+                scene,
+                s,
+                &gscene,
+                sun.as_ref().map(|(_, e)| e),
+            ))),
             AmbientInput::Normals => AmbientSource::Normals,
             AmbientInput::Lightmap(lm) => AmbientSource::lightmap(ctx, lm, page_size),
             AmbientInput::Sh(sh) => AmbientSource::sh(ctx, sh, scene.instances.len(), page_size),
@@ -312,9 +345,6 @@ impl Renderer {
         // A light-map holds the emitters' light already; SH transfer is lit by its SH light only.
         let area_lights =
             s.area_lights && matches!(ambient, AmbientInput::None | AmbientInput::Lpv(..));
-        let sun = (s.env_sun && matches!(ambient, AmbientInput::None | AmbientInput::Lpv(..)))
-            .then(|| environment_sun(scene, s.ambient))
-            .flatten();
         let ls = LightSet::new(
             scene,
             s,

@@ -206,6 +206,9 @@ pub struct RasterSettings {
     /// light for the diffuse term and leaves the SH ambient (`lightlab_core::sh_env::extract_sun`;
     /// the Phong and LPV techniques, `ambient` = the environment).
     pub env_sun: bool,
+    /// Sky directions whose shadow maps occlude the Phong techniques' diffuse sky light
+    /// (`raster::ambient::SkyOcclusion`); 0 leaves it unshadowed.
+    pub sky_occlusion: u32,
     pub refraction: Refraction,
     /// Texels of the environment map's level 0 over all faces (equal memory across
     /// parameterisations).
@@ -241,6 +244,7 @@ impl Default for RasterSettings {
             env_diffuse: EnvDiffuse::Sh,
             dynamic_env: false,
             env_sun: true,
+            sky_occlusion: super::ambient::SKY_OCCLUSION_DIRECTIONS,
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
         }

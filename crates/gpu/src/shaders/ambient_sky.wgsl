@@ -1,10 +1,10 @@
-// Ambient source `sky` (the Phong techniques): the environment's unshadowed SH irradiance.
-// Compiled after raster.wgsl; no bindings of its own.
+// Ambient source `sky` (the Phong techniques): the environment's SH irradiance, occluded by
+// the scene through shadow-mapped sky directions (sky_occlusion.wgsl, before this).
 
 fn source_vertex(p: vec3<f32>, vi: u32, ii: u32) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 
 fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
-    return sky_ambient(s) + emission(in);
+    return sky_ambient(s) * sky_visibility(s) + emission(in);
 }

@@ -1,8 +1,8 @@
 //! The sources of the ambient term, one per renderer, each owning its resources, its uniform
 //! block, its bind-group entries (group 2 from binding 3) and its pre-passes, and compiled with
 //! its own WGSL (`shaders/ambient_*.wgsl`):
-//! - `Sky`: the environment's unshadowed SH irradiance (in the frame uniforms): the Phong
-//!   techniques;
+//! - `Sky`: the environment's SH irradiance (in the frame uniforms), occluded by the scene
+//!   through shadow-mapped sky directions (`sky`): the Phong techniques;
 //! - `Lightmap`: diffuse × light-map (Fuchs §3.4), `lightmap`;
 //! - `Sh`: diffuse × SH transfer · SH light (the PRT techniques, `crate::prt`);
 //! - `Lpv`: the light propagation volume's indirect light plus the sky (`crate::lpv`);
@@ -11,8 +11,10 @@
 mod lightmap;
 mod lpv;
 mod sh;
+mod sky;
 
 pub(super) use sh::ShResources;
+pub use sky::{DEFAULT_DIRECTIONS as SKY_OCCLUSION_DIRECTIONS, SkyOcclusion};
 
 use super::bindings::{buffer, filtered_texture, sampler};
 use super::settings::Ambient;
@@ -46,7 +48,10 @@ impl SourceKind {
     /// The source's WGSL (compiled after raster.wgsl).
     pub fn wgsl(self) -> &'static str {
         match self {
-            SourceKind::Sky => include_str!("../../shaders/ambient_sky.wgsl"),
+            SourceKind::Sky => concat!(
+                include_str!("../../shaders/sky_occlusion.wgsl"),
+                include_str!("../../shaders/ambient_sky.wgsl")
+            ),
             SourceKind::Lightmap => include_str!("../../shaders/ambient_lightmap.wgsl"),
             SourceKind::Sh => include_str!("../../shaders/ambient_sh.wgsl"),
             SourceKind::Lpv => include_str!("../../shaders/ambient_lpv.wgsl"),
@@ -59,7 +64,8 @@ impl SourceKind {
         use wgpu::BufferBindingType::Uniform;
         use wgpu::SamplerBindingType::Filtering;
         match self {
-            SourceKind::Sky | SourceKind::Normals => vec![],
+            SourceKind::Normals => vec![],
+            SourceKind::Sky => sky::layout_entries(),
             SourceKind::Lightmap => vec![
                 buffer(3, Uniform, false),
                 filtered_texture(4, Dim::D2Array),
@@ -87,7 +93,7 @@ impl SourceKind {
 
 /// A renderer's ambient source and its resources.
 pub(super) enum AmbientSource {
-    Sky,
+    Sky(Box<SkyOcclusion>),
     Lightmap(lightmap::LightmapSource),
     Sh(Box<ShResources>),
     Lpv(Box<lpv::LpvSource>),
@@ -114,7 +120,7 @@ impl AmbientSource {
 
     pub fn kind(&self) -> SourceKind {
         match self {
-            AmbientSource::Sky => SourceKind::Sky,
+            AmbientSource::Sky(_) => SourceKind::Sky,
             AmbientSource::Lightmap(_) => SourceKind::Lightmap,
             AmbientSource::Sh(_) => SourceKind::Sh,
             AmbientSource::Lpv(_) => SourceKind::Lpv,
@@ -125,7 +131,8 @@ impl AmbientSource {
     /// Group 2's entries from binding 3 on.
     pub fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
         match self {
-            AmbientSource::Sky | AmbientSource::Normals => vec![],
+            AmbientSource::Sky(o) => o.entries(),
+            AmbientSource::Normals => vec![],
             AmbientSource::Lightmap(l) => l.entries(),
             AmbientSource::Sh(s) => s.entries(),
             AmbientSource::Lpv(l) => l.entries(),

@@ -1,0 +1,339 @@
+//! Occluded sky light for the Phong techniques (issue 22): the environment's diffuse light is
+//! split into cells around K directions (a spherical Fibonacci set; each environment texel goes
+//! to its nearest direction), each cell's irradiance kept as nine SH coefficients, and each
+//! direction gets an orthographic depth map of the scene seen from it. A surface point's sky
+//! light is then Σ_k V_k(p)·E_k(n), V_k read from map k with a small PCF kernel, applied as the
+//! ratio Σ V_k E_k / Σ E_k to the unshadowed term (SH or irradiance map), so that an open sky
+//! is unchanged.
+//!
+//! The maps are made once per renderer (static geometry: the viewer's moving objects keep the
+//! occlusion of their first pose) and cost K depth passes. Many shadow-mapped directions rather
+//! than screen-space occlusion: they see occluders off screen and behind the camera, and the
+//! same code serves any camera (dynamic environment maps' cube faces included). The sun taken
+//! out of the environment (`extract_sun`) is not in the cells: it is a light of its own.
+
+use crate::GpuContext;
+use crate::gpu_scene::{GpuScene, vertex_layout};
+use bytemuck::{Pod, Zeroable};
+use glam::camera::rh::proj::directx;
+use glam::camera::rh::view::look_to_mat4;
+use glam::{Mat4, Vec3};
+use lightlab_core::image::Image;
+use lightlab_core::sh_env::{EnvFormat, for_each_texel};
+use wgpu::util::DeviceExt;
+
+/// Directions by default (`--sky-occlusion`).
+pub const DEFAULT_DIRECTIONS: u32 = 64;
+/// Side of each direction's depth map.
+const MAP_SIZE: u32 = 256;
+
+/// Per direction (WGSL `SkyDir`): its view-projection, the unit direction towards the sky, and
+/// its cell's irradiance as nine SH coefficients (RGB).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct SkyDir {
+    pub view_proj: [[f32; 4]; 4],
+    pub dir: [f32; 4],
+    pub sh: [[f32; 4]; 9],
+}
+
+/// The occlusion's resources (group 2, bindings 3–5 of the `sky` source).
+pub struct SkyOcclusion {
+    depth: wgpu::TextureView,
+    sampler: wgpu::Sampler,
+    data: wgpu::Buffer,
+}
+
+/// `n` unit directions spread evenly over the sphere (spherical Fibonacci points).
+pub fn fibonacci_directions(n: u32) -> Vec<Vec3> {
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n)
+        .map(|i| {
+            let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let r = (1.0 - y * y).max(0.0).sqrt();
+            let phi = golden * i as f32;
+            Vec3::new(r * phi.cos(), y, r * phi.sin())
+        })
+        .collect()
+}
+
+/// Each direction's cell of `env` (lat-long, × `scale`) as SH irradiance coefficients: the
+/// radiance of the texels nearest to it, projected on nine SH functions and convolved with the
+/// clamped cosine. Their sum is the whole environment's irradiance.
+pub fn cell_irradiance(env: &Image, scale: f32, dirs: &[Vec3]) -> Vec<[Vec3; 9]> {
+    if dirs.is_empty() {
+        return vec![];
+    }
+    let mut radiance = vec![[glam::DVec3::ZERO; 9]; dirs.len()];
+    let mut y = [0.0f64; 9];
+    for_each_texel(env, EnvFormat::LatLong, |d, omega, v| {
+        let df = d.as_vec3();
+        let k = (0..dirs.len())
+            .max_by(|&a, &b| dirs[a].dot(df).total_cmp(&dirs[b].dot(df)))
+            .unwrap_or(0);
+        lightlab_core::sh::eval_f64(3, d.x, d.y, d.z, &mut y);
+        for (c, yj) in radiance[k].iter_mut().zip(&y) {
+            *c += v.as_dvec3() * (yj * omega * scale as f64);
+        }
+    });
+    radiance
+        .iter()
+        .map(|r| {
+            let e = lightlab_core::sh::irradiance_from_radiance(r);
+            std::array::from_fn(|j| e[j].as_vec3())
+        })
+        .collect()
+}
+
+/// An orthographic view-projection looking along −`dir` at a sphere (centre, radius), depth
+/// 0..1 over the sphere's extent.
+fn view_proj(dir: Vec3, centre: Vec3, radius: f32) -> Mat4 {
+    let eye = centre + dir * (2.0 * radius);
+    let up = if dir.y.abs() > 0.9 { Vec3::X } else { Vec3::Y };
+    // Depths 0.5–3.5 radii from the eye (the sphere spans 1–3).
+    directx::orthographic(-radius, radius, -radius, radius, radius * 0.5, radius * 3.5)
+        * look_to_mat4(eye, -dir, up)
+}
+
+impl SkyOcclusion {
+    /// Occlusion for `env` (× `scale`) over `gscene` with `directions` directions; with 0 (or
+    /// no environment) a dummy that binds but occludes nothing.
+    pub fn new(
+        ctx: &GpuContext,
+        gscene: &GpuScene,
+        env: Option<(&Image, f32)>,
+        directions: u32,
+    ) -> SkyOcclusion {
+        let (lo, hi) = gscene.bounds;
+        let directions = if env.is_some() && hi.cmpge(lo).all() {
+            directions
+        } else {
+            0
+        };
+        let centre = (lo + hi) * 0.5;
+        let radius = ((hi - lo).length() * 0.5).max(1e-3) * 1.01;
+        let dirs = fibonacci_directions(directions);
+        let cells = env.map_or(vec![], |(img, s)| cell_irradiance(img, s, &dirs));
+        let data: Vec<SkyDir> = dirs
+            .iter()
+            .zip(&cells)
+            .map(|(d, sh)| SkyDir {
+                view_proj: view_proj(*d, centre, radius).to_cols_array_2d(),
+                dir: d.extend(0.0).to_array(),
+                sh: sh.map(|c| c.extend(0.0).to_array()),
+            })
+            .collect();
+        let device = &ctx.device;
+        let layers = directions.max(1);
+        let size = if directions == 0 { 1 } else { MAP_SIZE };
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("sky occlusion"),
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Depth32Float,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        render_maps(ctx, gscene, &texture, &data);
+        let header = [directions as f32, 2.0 * radius / size as f32, radius, 0.0];
+        let mut bytes = bytemuck::bytes_of(&header).to_vec();
+        if data.is_empty() {
+            bytes.extend_from_slice(bytemuck::bytes_of(&SkyDir::zeroed()));
+        } else {
+            bytes.extend_from_slice(bytemuck::cast_slice(&data));
+        }
+        SkyOcclusion {
+            depth: texture.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            }),
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("sky occlusion"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            }),
+            data: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("sky occlusion directions"),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            }),
+        }
+    }
+
+    /// Group 2's entries 8–10 (`sky_occlusion.wgsl`).
+    pub fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
+        use super::super::bindings::entry;
+        use wgpu::BindingResource as R;
+        vec![
+            entry(8, R::TextureView(&self.depth)),
+            entry(9, R::Sampler(&self.sampler)),
+            entry(10, self.data.as_entire_binding()),
+        ]
+    }
+}
+
+/// Group 2's layout entries 8–10 of the `sky` source. (The `lpv` source would pass the
+/// 16 sampled textures a stage may have under wgpu's default limits.)
+pub fn layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
+    use super::super::bindings::{sampler, storage, texture};
+    vec![
+        texture(
+            8,
+            wgpu::TextureSampleType::Depth,
+            wgpu::TextureViewDimension::D2Array,
+        ),
+        sampler(9, wgpu::SamplerBindingType::Comparison),
+        storage(10),
+    ]
+}
+
+const DEPTH_WGSL: &str = "
+@group(0) @binding(0) var<uniform> view_proj: mat4x4<f32>;
+@vertex
+fn vs(@location(0) p: vec3<f32>) -> @builtin(position) vec4<f32> {
+    return view_proj * vec4<f32>(p, 1.0);
+}
+";
+
+/// One depth pass per direction into layer k (every draw, as opaque, both faces).
+fn render_maps(ctx: &GpuContext, gscene: &GpuScene, texture: &wgpu::Texture, data: &[SkyDir]) {
+    let device = &ctx.device;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("sky occlusion depth"),
+        source: wgpu::ShaderSource::Wgsl(DEPTH_WGSL.into()),
+    });
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("sky occlusion depth"),
+        entries: &[super::super::bindings::buffer(
+            0,
+            wgpu::BufferBindingType::Uniform,
+            false,
+        )],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("sky occlusion depth"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("sky occlusion depth"),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[Some(vertex_layout())],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    for (k, d) in data.iter().enumerate() {
+        let ubuf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("sky occlusion view"),
+            contents: bytemuck::cast_slice(&d.view_proj),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("sky occlusion view"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: ubuf.as_entire_binding(),
+            }],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2),
+            base_array_layer: k as u32,
+            array_layer_count: Some(1),
+            ..Default::default()
+        });
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("sky occlusion depth"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.set_vertex_buffer(0, gscene.vertices.slice(..));
+        pass.set_index_buffer(gscene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for dr in &gscene.draws {
+            pass.draw_indexed(dr.first_index..dr.first_index + dr.index_count, 0, 0..1);
+        }
+    }
+    ctx.queue.submit([enc.finish()]);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cells partition the environment: their irradiance sums to the whole map's, for a
+    /// sky with a bright lobe; and a uniform sky's cells each hold about 1/K of it.
+    #[test]
+    fn cells_sum_to_the_environment() {
+        let img = Image::from_fn(128, 64, |x, y| {
+            let d = lightlab_core::sh_env::latlong_uv_to_dir(glam::Vec2::new(
+                (x as f32 + 0.5) / 128.0,
+                (y as f32 + 0.5) / 64.0,
+            ));
+            Vec3::new(0.3, 0.4, 0.6)
+                + Vec3::splat(5.0 * d.dot(Vec3::new(0.3, 0.8, 0.5).normalize()).max(0.0).powi(8))
+        });
+        let whole = lightlab_core::sh::irradiance_from_radiance(
+            &lightlab_core::sh_env::project_env(&img, EnvFormat::LatLong, 3),
+        );
+        let dirs = fibonacci_directions(64);
+        assert!(dirs.iter().all(|d| (d.length() - 1.0).abs() < 1e-5));
+        let cells = cell_irradiance(&img, 1.0, &dirs);
+        for j in 0..9 {
+            let sum: Vec3 = cells.iter().map(|c| c[j]).sum();
+            assert!(
+                (sum - whole[j].as_vec3()).length() < 1e-3 * whole[0].length() as f32,
+                "coefficient {j}"
+            );
+        }
+        let flat = Image::from_fn(128, 64, |_, _| Vec3::ONE);
+        for c in cell_irradiance(&flat, 1.0, &dirs) {
+            // The DC term of a uniform sky is π·√(4π)·L over 64 cells.
+            let expect = std::f32::consts::PI * (4.0 * std::f32::consts::PI).sqrt() / 64.0;
+            assert!(
+                (c[0].x - expect).abs() < 0.15 * expect,
+                "{} vs {expect}",
+                c[0].x
+            );
+        }
+        assert!(cell_irradiance(&flat, 1.0, &[]).is_empty());
+    }
+}

@@ -1,0 +1,52 @@
+// The sky's occlusion (raster/ambient/sky.rs) for the `sky` ambient source:
+// the fraction of the environment's diffuse light that reaches a point, from shadow-mapped sky
+// directions. Compiled after raster.wgsl, before the source's own WGSL; group 2, bindings 8–10.
+
+// One sky direction: its orthographic view-projection, the unit direction towards the sky and
+// its cell's irradiance as nine SH coefficients.
+struct SkyDir {
+    view_proj: mat4x4<f32>,
+    dir: vec4<f32>,
+    sh: array<vec4<f32>, 9>,
+}
+
+// x: directions (0: no occlusion), y: a map texel in world units, z: the scene's radius.
+struct SkyOcclusion {
+    header: vec4<f32>,
+    dirs: array<SkyDir>,
+}
+
+@group(2) @binding(8) var sky_depth: texture_depth_2d_array;
+@group(2) @binding(9) var sky_cmp: sampler_comparison;
+@group(2) @binding(10) var<storage, read> sky: SkyOcclusion;
+
+// Whether p (geometric normal ng) sees the sky along direction k: one bilinear depth
+// comparison (2 × 2 texels), the point moved off the surface by two texels along ng.
+fn sky_visible(k: u32, p: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let texel = sky.header.y;
+    let q = p + ng * (2.0 * texel);
+    let clip = sky.dirs[k].view_proj * vec4<f32>(q, 1.0);
+    let uv = vec2<f32>(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
+    // One texel's depth in the map's 0..1 range (over 3 radii), as a bias.
+    let z = clip.z - texel / (3.0 * sky.header.z);
+    return textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), z);
+}
+
+// The fraction of the sky's irradiance at n that reaches p: Σ V_k E_k(n) / Σ E_k(n) by
+// luminance (1 without occlusion).
+fn sky_visibility(s: Surface) -> f32 {
+    let count = u32(sky.header.x);
+    let y = sh9(s.n);
+    var all = 0.0;
+    var seen = 0.0;
+    for (var k = 0u; k < count; k++) {
+        var e = vec3<f32>(0.0);
+        for (var j = 0u; j < 9u; j++) {
+            e += sky.dirs[k].sh[j].xyz * y[j];
+        }
+        let w = max(dot(max(e, vec3<f32>(0.0)), vec3<f32>(0.2126, 0.7152, 0.0722)), 0.0);
+        all += w;
+        seen += w * sky_visible(k, s.p, s.ng);
+    }
+    return select(1.0, seen / max(all, 1e-8), count > 0u && all > 0.0);
+}
