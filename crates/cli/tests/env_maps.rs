@@ -496,6 +496,8 @@ fn static_and_dynamic(
 /// The environment's sun (`--env-sun on`, the default): the `spheres` sky's bright lobe becomes
 /// a directional light with shadows for the diffuse term, so a diffuse ball casts its shadow on
 /// the floor as in the path tracer, instead of the sun staying in the unshadowed SH ambient.
+/// Measured with the sky unoccluded (`--sky-occlusion 0`) to see the sun alone, then with the
+/// default occluded sky.
 #[test]
 fn the_environment_sun_casts_shadows() {
     let tmp = tempfile::tempdir().unwrap();
@@ -507,30 +509,38 @@ fn the_environment_sun_casts_shadows() {
     m.base_color = Vec4::new(0.8, 0.8, 0.8, 1.0);
     let glb = p("sun.glb");
     lightlab_scene::gltf_io::export(&scene, &glb).unwrap();
-    let (reference, on, off) = (p("ref.exr"), p("on.exr"), p("off.exr"));
+    let reference = p("ref.exr");
     render(&glb, "reference", &["--spp", "256"], &reference);
-    render(&glb, "phong-shadow-maps", &["--ssaa", "2"], &on);
-    render(
-        &glb,
-        "phong-shadow-maps",
-        &["--ssaa", "2", "--env-sun", "off"],
-        &off,
-    );
-    let (e_on, e_off) = (
-        masked_relmse(&scene, &on, &reference, false),
-        masked_relmse(&scene, &off, &reference, false),
-    );
-    let (b_on, b_off) = (
-        sphere_relmse(&scene, &on, &reference),
-        sphere_relmse(&scene, &off, &reference),
-    );
+    let mut around = vec![];
+    let mut on_ball = vec![];
+    for (name, extra) in [
+        ("off", &["--env-sun", "off", "--sky-occlusion", "0"][..]),
+        ("sun", &["--sky-occlusion", "0"][..]),
+        ("default", &[][..]),
+    ] {
+        let out = p(&format!("{name}.exr"));
+        let mut args = vec!["--ssaa", "2"];
+        args.extend_from_slice(extra);
+        render(&glb, "phong-shadow-maps", &args, &out);
+        around.push(masked_relmse(&scene, &out, &reference, false));
+        on_ball.push(sphere_relmse(&scene, &out, &reference));
+    }
     eprintln!(
-        "diffuse ball on a floor under the spheres sky: relMSE around the ball {e_on:.4} with \
-         the sun extracted, {e_off:.4} without; on the ball {b_on:.4}, {b_off:.4}"
+        "diffuse ball on a floor under the spheres sky, relMSE around the ball / on it: sky \
+         unshadowed with its sun {:.4} / {:.4}, the sun extracted {:.4} / {:.4}, and the sky \
+         occluded {:.4} / {:.4}",
+        around[0], on_ball[0], around[1], on_ball[1], around[2], on_ball[2]
     );
     assert!(
-        e_on < 0.7 * e_off,
-        "the sun's shadow does not help: {e_on} vs {e_off}"
+        around[1] < 0.7 * around[0],
+        "the sun's shadow does not help: {around:?}"
     );
-    assert!(b_on < 1.1 * b_off, "the ball got worse: {b_on} vs {b_off}");
+    assert!(
+        on_ball[1] < 1.1 * on_ball[0],
+        "the ball got worse: {on_ball:?}"
+    );
+    assert!(
+        around[2] < 0.7 * around[1],
+        "the occluded sky does not help: {around:?}"
+    );
 }
