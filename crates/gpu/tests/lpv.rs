@@ -274,6 +274,8 @@ fn lpv_indirect_light_on_cornell_against_one_bounce_of_the_reference() {
         height: 64,
         shadows: ShadowMethod::None,
         ambient: Ambient::Constant(Vec3::ONE),
+        // The albedo: the constant sky unoccluded (inside the box it would be shadowed).
+        sky_occlusion: 0,
         ..Default::default()
     };
     let mut r = Renderer::new(&ctx, &plain, rs).unwrap();
