@@ -384,7 +384,14 @@ impl Renderer {
         let (shadow, arrays) = ShadowMaps::new(ctx, s, ls.views.len(), linear_format);
         // The specular environment term, except on the debug and indirect-only views.
         let env_on = !matches!(ambient, AmbientInput::Normals | AmbientInput::Lpv(_, true));
-        let env = super::env::EnvResources::new(ctx, scene, s, &camera, env_on);
+        let env = super::env::EnvResources::new(
+            ctx,
+            scene,
+            s,
+            &camera,
+            env_on,
+            sun.as_ref().map(|(_, e)| e),
+        );
         let lighting = lighting_group(device, &layouts.lighting, &arrays, &source, &env);
         let g = groups(device, &layouts, &buffers, &targets, lighting);
         let sky_group = scene

@@ -144,24 +144,22 @@ fn param_of(kind: EnvMapKind) -> Option<(Param, u32)> {
 }
 
 /// The prefiltered maps of the scene's environment for `s`, or None when neither the specular
-/// term nor the irradiance map needs them (a constant ambient needs no map).
-pub fn prefiltered(scene: &Scene, s: &RasterSettings, camera: &Camera) -> Option<EnvMaps> {
+/// term nor the irradiance map needs them (a constant ambient needs no map). `sun`: the sun the
+/// renderer took out of the environment as a light (`--env-sun`), which the irradiance map
+/// leaves out as the SH coefficients do.
+pub fn prefiltered(
+    scene: &Scene,
+    s: &RasterSettings,
+    camera: &Camera,
+    sun: Option<&lightlab_core::sh_env::EnvSun>,
+) -> Option<EnvMaps> {
     let env = scene.environment.as_ref()?;
     if s.ambient != Ambient::Environment {
         return None;
     }
     let settings = env_settings(scene, s, camera)?;
-    // With the environment's sun shadowed as a light (`--env-sun`), the irradiance map holds
-    // the sky without it, as the SH coefficients do; the specular levels keep it.
-    let sun = settings
-        .irradiance
-        .then(|| {
-            s.env_sun
-                .then(|| super::ambient::environment_sun(scene, s.ambient))
-        })
-        .flatten()
-        .flatten();
-    let Some((_, sun)) = sun else {
+    // The specular levels keep the sun; the irradiance map holds the sky without it.
+    let Some(sun) = sun.filter(|_| settings.irradiance) else {
         return Some(envmap::prefilter(&env.image, env.intensity, &settings));
     };
     let mut maps = envmap::prefilter(
@@ -221,9 +219,10 @@ impl EnvResources {
         s: &RasterSettings,
         camera: &Camera,
         enabled: bool,
+        sun: Option<&lightlab_core::sh_env::EnvSun>,
     ) -> EnvResources {
         let mut maps = if enabled {
-            prefiltered(scene, s, camera)
+            prefiltered(scene, s, camera, sun)
         } else {
             None
         };
