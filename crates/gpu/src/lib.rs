@@ -105,6 +105,9 @@ impl GpuContext {
                     adapter.limits().max_color_attachment_bytes_per_sample,
                 max_storage_buffers_per_shader_stage:
                     adapter.limits().max_storage_buffers_per_shader_stage,
+                // The LPV source with sky occlusion reads 17 textures in its fragment stage.
+                max_sampled_textures_per_shader_stage:
+                    adapter.limits().max_sampled_textures_per_shader_stage,
                 ..wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits())
             },
             experimental_features: wgpu::ExperimentalFeatures::disabled(),

@@ -41,7 +41,7 @@ fn cpu_volume(
 ) -> Volume {
     let l = r.lpv().unwrap();
     let grid = l.grids[cascade];
-    let light = rsm_lights(scene, l.grids.last().unwrap(), l.settings.rsm_size)[0].0;
+    let light = rsm_lights(scene, None, l.grids.last().unwrap(), l.settings.rsm_size)[0].0;
     let eye = Vec3::from_array(light.eye);
     let mut vpls = Vec::new();
     let mut surfels = Vec::new();

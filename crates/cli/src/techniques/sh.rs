@@ -11,7 +11,7 @@ use lightlab_bake::sh_compress::{CompressSettings, CompressedSh, compress};
 use lightlab_bake::sh_light::{SamplePoints, ShLighting, ShProjector};
 use lightlab_gpu::GpuContext;
 use lightlab_gpu::prt::{IndexPage, ShFilter, ShInput, ShTransfer};
-use lightlab_gpu::raster::{Ambient, Renderer};
+use lightlab_gpu::raster::{EnvDiffuse, Renderer};
 use lightlab_scene::Scene;
 
 /// Transfer data of an SH technique.
@@ -151,7 +151,10 @@ pub fn renderer(ctx: &GpuContext, req: &Request, data: &ShData) -> Result<(Rende
         req.height,
         req.camera,
     )?;
-    s.ambient = Ambient::None;
+    // The transfer carries the diffuse light, the sky's included (the SH source leaves the
+    // frame's SH irradiance unused); the environment's specular term for glossy and metal
+    // materials still comes from its prefiltered maps, so only an irradiance map is not made.
+    s.env_diffuse = EnvDiffuse::Sh;
     // The lights reach the surfaces through the transfer only.
     let mut scene = data.scene().clone();
     let projector = ShProjector::new(&scene, &ls);

@@ -263,9 +263,15 @@ const AREA_HALF_ANGLE: f32 = 75.0 * std::f32::consts::PI / 180.0;
 /// At most this many RSM views (the first ones of the scene; a point light takes six).
 pub const MAX_RSM_LIGHTS: usize = 24;
 
-/// The RSM lights of a scene for a volume `grid`, with an upper bound of the flux each can put
-/// into its RSM (for the fixed-point scale).
-pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)> {
+/// The RSM lights of a scene, and of `extra` (the environment's sun taken out as a light), for
+/// a volume `grid`, with an upper bound of the flux each can put into its RSM (for the
+/// fixed-point scale).
+pub fn rsm_lights(
+    scene: &Scene,
+    extra: Option<&lightlab_scene::Light>,
+    grid: &Grid,
+    size: u32,
+) -> Vec<(RsmLight, f32)> {
     let half = 0.5 * grid.cell * grid.n as f32;
     let centre = grid.origin + Vec3::splat(half);
     let radius = half * 3f32.sqrt();
@@ -274,7 +280,7 @@ pub fn rsm_lights(scene: &Scene, grid: &Grid, size: u32) -> Vec<(RsmLight, f32)>
         if d.y.abs() > 0.99 { Vec3::X } else { Vec3::Y }
     };
     let far_from = |eye: Vec3| (eye - centre).length() + radius;
-    for l in &scene.lights {
+    for l in scene.lights.iter().chain(extra) {
         let colour = l.color * l.intensity;
         // A square perspective view of half-angle `half` from `eye` along `d` (kind 1).
         let spot_view = |eye: Vec3, d: Vec3, half: f32| RsmLight {
@@ -450,10 +456,12 @@ const CELL_BYTES: u64 = 48;
 
 impl Lpv {
     /// The volumes for `camera` (where the cascades go, and whose view adds blockers) with an
-    /// image of `aspect` = width/height.
+    /// image of `aspect` = width/height, lit by the scene's lights and `sun` (the environment's
+    /// sun taken out as a directional light).
     pub fn new(
         ctx: &GpuContext,
         scene: &Scene,
+        sun: Option<&lightlab_scene::Light>,
         settings: LpvSettings,
         camera: &lightlab_scene::Camera,
         aspect: f32,
@@ -469,7 +477,7 @@ impl Lpv {
         let grids = settings.grids_for(scene, eye, forward);
         let grid = *grids.last().expect("at least one cascade");
         let size = settings.rsm_size;
-        let mut lights = rsm_lights(scene, &grid, size);
+        let mut lights = rsm_lights(scene, sun, &grid, size);
         let bound = lights.iter().map(|l| l.1).sum::<f32>().max(1e-12);
         if settings.occlusion && settings.camera_blockers && settings.scheme == LpvScheme::Kaplanyan
         {

@@ -109,7 +109,7 @@ impl FrameBuffers {
 }
 
 /// The frame uniforms: camera, shadow settings and the sky's SH irradiance.
-/// The `sky` source's occlusion: the sky's diffuse light (without the sun taken out of it, or
+/// The `sky` and `lpv` sources' occlusion: the sky's diffuse light (without the sun taken out of it, or
 /// a constant ambient's uniform sky) over `s.sky_occlusion` shadow-mapped directions.
 fn sky_occlusion(
     ctx: &GpuContext,
@@ -338,8 +338,10 @@ impl Renderer {
             AmbientInput::Sh(sh) => AmbientSource::sh(ctx, sh, scene.instances.len(), page_size),
             AmbientInput::Lpv(l, indirect_only) => {
                 let aspect = s.width as f32 / s.height as f32;
-                let v = Lpv::new(ctx, scene, l.clone(), &camera, aspect, &s.wind)?;
-                AmbientSource::lpv(ctx, v, indirect_only)
+                let sun_light = sun.as_ref().map(|(l, _)| l);
+                let v = Lpv::new(ctx, scene, sun_light, l.clone(), &camera, aspect, &s.wind)?;
+                let sky = sky_occlusion(ctx, scene, s, &gscene, sun.as_ref().map(|(_, e)| e));
+                AmbientSource::lpv(ctx, v, sky, indirect_only)
             }
         };
         // A light-map holds the emitters' light already; SH transfer is lit by its SH light only.

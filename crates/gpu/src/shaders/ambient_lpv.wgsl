@@ -1,6 +1,7 @@
 // Ambient source `lpv` (Kaplanyan & Dachsbacher 2010; the WPI 2011 report): the volume's
 // indirect light on the diffuse surface (through thin foliage from both sides), plus the sky's
-// SH irradiance and emission. Compiled after raster.wgsl.
+// SH irradiance, occluded through the shadow-mapped sky directions (sky_occlusion.wgsl, before
+// this), and emission. Compiled after raster.wgsl.
 
 @group(2) @binding(3) var<uniform> lpv_u: LpvAmbientUniforms;
 // Light propagation volume (r, g, b intensity SH per cell), trilinear.
@@ -100,5 +101,5 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     if lpv_u.indirect_only == 1u {
         return indirect;
     }
-    return indirect + sky_ambient(s) + emission(in);
+    return indirect + sky_ambient(s) * sky_visibility(s) + emission(in);
 }

@@ -1,4 +1,4 @@
-// The sky's occlusion (raster/ambient/sky.rs) for the `sky` ambient source:
+// The sky's occlusion (raster/ambient/sky.rs) for the `sky` and `lpv` ambient sources:
 // the fraction of the environment's diffuse light that reaches a point, from shadow-mapped sky
 // directions. Compiled after raster.wgsl, before the source's own WGSL; group 2, bindings 8–10.
 

@@ -797,17 +797,12 @@ fn spheres() -> Scene {
             ..Default::default()
         },
     ];
+    // The ground is a 80 × 80 grid (12.5 cm cells), not one quad, so that per-vertex methods
+    // (per-vertex PRT) hold the spheres' contact shadows.
     s.add_mesh(
-        quad(
-            "ground",
-            [
-                Vec3::new(-5.0, 0.0, 5.0),
-                Vec3::new(5.0, 0.0, 5.0),
-                Vec3::new(5.0, 0.0, -5.0),
-                Vec3::new(-5.0, 0.0, -5.0),
-            ],
-            ground,
-        ),
+        parametric("ground", 80, 80, ground, Vec2::splat(10.0), |u, v| {
+            Vec3::new(-5.0 + 10.0 * u, 0.0, -5.0 + 10.0 * v)
+        }),
         Mat4::IDENTITY,
     );
     for (i, m) in mats.into_iter().enumerate() {

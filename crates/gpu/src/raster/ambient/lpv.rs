@@ -1,5 +1,7 @@
 //! The volume source: the light propagation volume (recomputed every frame by its pre-passes)
-//! read trilinearly from its three 3D textures.
+//! read trilinearly from its three 3D textures, and the sky's light occluded through the
+//! `sky` source's shadow-mapped directions (bindings 8–10; 17 sampled textures in all, past
+//! the 16 of wgpu's default limits, so the device asks for the adapter's).
 
 use super::super::bindings::entry;
 use crate::GpuContext;
@@ -11,13 +13,19 @@ use wgpu::util::DeviceExt;
 pub(in crate::raster) struct LpvSource {
     pub volume: Lpv,
     pub indirect_only: bool,
+    sky: super::SkyOcclusion,
     uniforms: wgpu::Buffer,
     views: Vec<wgpu::TextureView>,
     sampler: wgpu::Sampler,
 }
 
 impl LpvSource {
-    pub fn new(ctx: &GpuContext, volume: Lpv, indirect_only: bool) -> LpvSource {
+    pub fn new(
+        ctx: &GpuContext,
+        volume: Lpv,
+        sky: super::SkyOcclusion,
+        indirect_only: bool,
+    ) -> LpvSource {
         let mut u = LpvAmbientUniforms {
             mode: match volume.settings.scheme {
                 LpvScheme::Kaplanyan => 1,
@@ -57,6 +65,7 @@ impl LpvSource {
         LpvSource {
             volume,
             indirect_only,
+            sky,
             uniforms,
             views,
             sampler,
@@ -64,12 +73,14 @@ impl LpvSource {
     }
 
     pub fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
-        vec![
+        let mut e = vec![
             entry(3, self.uniforms.as_entire_binding()),
             entry(4, R::TextureView(&self.views[0])),
             entry(5, R::TextureView(&self.views[1])),
             entry(6, R::TextureView(&self.views[2])),
             entry(7, R::Sampler(&self.sampler)),
-        ]
+        ];
+        e.extend(self.sky.entries());
+        e
     }
 }

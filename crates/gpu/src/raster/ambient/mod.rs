@@ -5,7 +5,8 @@
 //!   through shadow-mapped sky directions (`sky`): the Phong techniques;
 //! - `Lightmap`: diffuse × light-map (Fuchs §3.4), `lightmap`;
 //! - `Sh`: diffuse × SH transfer · SH light (the PRT techniques, `crate::prt`);
-//! - `Lpv`: the light propagation volume's indirect light plus the sky (`crate::lpv`);
+//! - `Lpv`: the light propagation volume's indirect light plus the sky, occluded as `Sky`'s
+//!   (`crate::lpv`);
 //! - `Normals`: the shading normal as a colour (the `normals` debug technique).
 
 mod lightmap;
@@ -54,7 +55,10 @@ impl SourceKind {
             ),
             SourceKind::Lightmap => include_str!("../../shaders/ambient_lightmap.wgsl"),
             SourceKind::Sh => include_str!("../../shaders/ambient_sh.wgsl"),
-            SourceKind::Lpv => include_str!("../../shaders/ambient_lpv.wgsl"),
+            SourceKind::Lpv => concat!(
+                include_str!("../../shaders/sky_occlusion.wgsl"),
+                include_str!("../../shaders/ambient_lpv.wgsl")
+            ),
             SourceKind::Normals => include_str!("../../shaders/ambient_normals.wgsl"),
         }
     }
@@ -80,13 +84,17 @@ impl SourceKind {
                 super::bindings::texture(8, wgpu::TextureSampleType::Uint, Dim::D2Array),
                 super::bindings::storage(9),
             ],
-            SourceKind::Lpv => vec![
-                buffer(3, Uniform, false),
-                filtered_texture(4, Dim::D3),
-                filtered_texture(5, Dim::D3),
-                filtered_texture(6, Dim::D3),
-                sampler(7, Filtering),
-            ],
+            SourceKind::Lpv => [
+                vec![
+                    buffer(3, Uniform, false),
+                    filtered_texture(4, Dim::D3),
+                    filtered_texture(5, Dim::D3),
+                    filtered_texture(6, Dim::D3),
+                    sampler(7, Filtering),
+                ],
+                sky::layout_entries(),
+            ]
+            .concat(),
         }
     }
 }
@@ -114,8 +122,18 @@ impl AmbientSource {
         AmbientSource::Sh(Box::new(ShResources::new(ctx, sh, instances, page_size)))
     }
 
-    pub fn lpv(ctx: &GpuContext, volume: crate::lpv::Lpv, indirect_only: bool) -> AmbientSource {
-        AmbientSource::Lpv(Box::new(lpv::LpvSource::new(ctx, volume, indirect_only)))
+    pub fn lpv(
+        ctx: &GpuContext,
+        volume: crate::lpv::Lpv,
+        sky: SkyOcclusion,
+        indirect_only: bool,
+    ) -> AmbientSource {
+        AmbientSource::Lpv(Box::new(lpv::LpvSource::new(
+            ctx,
+            volume,
+            sky,
+            indirect_only,
+        )))
     }
 
     pub fn kind(&self) -> SourceKind {

@@ -180,8 +180,7 @@ impl SkyOcclusion {
     }
 }
 
-/// Group 2's layout entries 8–10 of the `sky` source. (The `lpv` source would pass the
-/// 16 sampled textures a stage may have under wgpu's default limits.)
+/// Group 2's layout entries 8–10 of the `sky` and `lpv` sources.
 pub fn layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
     use super::super::bindings::{sampler, storage, texture};
     vec![
