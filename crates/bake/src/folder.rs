@@ -277,6 +277,10 @@ fn kind_of(format: Option<&str>) -> &'static str {
         Some(crate::sh_folder::VERTEX_FORMAT) => {
             "a per-vertex transfer folder (`bake --method prt`)"
         }
+        Some(crate::shard::PART_FORMAT) => "a part of a sharded bake (`bake --shard I/N`)",
+        Some(crate::shard::RENDER_PART_FORMAT) => {
+            "a part of a sharded render (`render --shard I/N`)"
+        }
         _ => "not a lightlab bake folder",
     }
 }

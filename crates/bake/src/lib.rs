@@ -24,6 +24,7 @@ pub mod sh_compress;
 pub mod sh_cpca;
 pub mod sh_folder;
 pub mod sh_light;
+pub mod shard;
 pub mod texels;
 pub mod view;
 
@@ -167,6 +168,33 @@ pub fn bake_lightmaps(
     settings: &BakeSettings,
     progress: Progress,
 ) -> Result<Lightmaps, BakeError> {
+    let mut prep = prepare(scene, settings, progress)?;
+    let t1 = Instant::now();
+    let valid = prep.valid.clone();
+    let (values, directional) = solve(&mut prep, settings, &valid, progress)?;
+    prep.stats.seconds_solve = t1.elapsed().as_secs_f64();
+    prep.stats.rays = prep.accel.rays_cast();
+    Ok(finish(prep, settings, values, directional, progress))
+}
+
+/// A bake up to its solver: the scene with light-map UVs, its layout, the texels and their
+/// validity, and the figures so far ([`bake_lightmaps`] = prepare, solve, finish; a shard
+/// solves part of the texels, a merge only prepares and finishes, see [`shard`]).
+pub(crate) struct Prepared {
+    pub scene: Scene,
+    pub layout: Layout,
+    pub texels: texels::Texels,
+    pub valid: Vec<Vec<bool>>,
+    pub accel: Accel,
+    pub stats: BakeStats,
+    pub t0: Instant,
+}
+
+pub(crate) fn prepare(
+    scene: &Scene,
+    settings: &BakeSettings,
+    progress: Progress,
+) -> Result<Prepared, BakeError> {
     let t0 = Instant::now();
     if settings.light_modes.len() > scene.lights.len() {
         return Err(BakeError::Settings(format!(
@@ -174,6 +202,11 @@ pub fn bake_lightmaps(
             settings.light_modes.len(),
             scene.lights.len()
         )));
+    }
+    if settings.gather.directional && settings.method != Method::Path {
+        return Err(BakeError::Settings(
+            "directional light-maps are gathered by path tracing: use the path method".into(),
+        ));
     }
     let mut scene = scene.clone();
     progress("layout", 0, 1);
@@ -191,27 +224,39 @@ pub fn bake_lightmaps(
         settings.max_backface_fraction,
         settings.seed,
     );
-    let seconds_layout = t0.elapsed().as_secs_f64();
-    let mut stats = BakeStats {
+    let stats = BakeStats {
         pages: layout.pages.len(),
         page_texels: layout.texel_count(),
         texels: texels.count(),
         valid_texels: valid.iter().flatten().filter(|&&b| b).count(),
         charts: layout.charts,
         utilization: layout.utilization,
-        seconds_layout,
+        seconds_layout: t0.elapsed().as_secs_f64(),
         ..Default::default()
     };
-    let t1 = Instant::now();
-    if settings.gather.directional && settings.method != Method::Path {
-        return Err(BakeError::Settings(
-            "directional light-maps are gathered by path tracing: use the path method".into(),
-        ));
-    }
-    let mut directional: Option<Vec<Vec<Vec3>>> = None;
-    let values = match settings.method {
+    Ok(Prepared {
+        scene,
+        layout,
+        texels,
+        valid,
+        accel,
+        stats,
+        t0,
+    })
+}
+
+/// The solver over the texels `valid` marks (all of a bake's, or a shard's part of them):
+/// per page and texel E/π, and the directional ratios when asked for.
+pub(crate) fn solve(
+    prep: &mut Prepared,
+    settings: &BakeSettings,
+    valid: &[Vec<bool>],
+    progress: Progress,
+) -> Result<gather::Gathered, BakeError> {
+    let scene = &prep.scene;
+    match settings.method {
         Method::Path => {
-            let mut tracer = PathTracer::new(&scene, &accel);
+            let mut tracer = PathTracer::new(scene, &prep.accel);
             tracer.light_use = (0..scene.lights.len())
                 .map(
                     |i| match settings.light_modes.get(i).copied().unwrap_or_default() {
@@ -227,35 +272,49 @@ pub fn bake_lightmaps(
                     },
                 )
                 .collect();
-            let (v, d) = gather::gather(
+            gather::gather(
                 &tracer,
-                &texels,
-                &valid,
+                &prep.texels,
+                valid,
                 &settings.gather,
                 settings.seed,
                 progress,
-            )?;
-            directional = d;
-            v
+            )
         }
         Method::Radiosity => {
             let (v, rs) = radiosity::solve(
-                &scene,
-                &accel,
-                &texels,
-                &valid,
+                scene,
+                &prep.accel,
+                &prep.texels,
+                valid,
                 &settings.light_modes,
                 &settings.radiosity,
                 settings.seed,
                 progress,
             )?;
-            stats.radiosity = Some(rs);
-            v
+            prep.stats.radiosity = Some(rs);
+            Ok((v, None))
         }
-    };
-    stats.seconds_solve = t1.elapsed().as_secs_f64();
-    stats.rays = accel.rays_cast();
-    // Repair: fill invalid and empty texels, then stitch seams.
+    }
+}
+
+/// Repair (fill invalid and empty texels, stitch seams) and package the solved values.
+pub(crate) fn finish(
+    prep: Prepared,
+    settings: &BakeSettings,
+    values: Vec<Vec<Vec3>>,
+    directional: Option<Vec<Vec<Vec3>>>,
+    progress: Progress,
+) -> Lightmaps {
+    let Prepared {
+        scene,
+        layout,
+        texels,
+        valid,
+        mut stats,
+        t0,
+        ..
+    } = prep;
     let mut pages: Vec<Image> = vec![];
     let mut filled_masks = vec![];
     let mut dir_pages: Vec<Image> = vec![];
@@ -298,14 +357,14 @@ pub fn bake_lightmaps(
     }
     stats.seconds_total = t0.elapsed().as_secs_f64();
     progress("done", 1, 1);
-    Ok(Lightmaps {
+    Lightmaps {
         scene,
         layout,
         pages,
         directional: (!dir_pages.is_empty()).then_some(dir_pages),
         settings: settings.clone(),
         stats,
-    })
+    }
 }
 
 /// Bilinear sample of a page at page coordinates `uv` ∈ [0, 1]² (texel centres at (i+½)/w),

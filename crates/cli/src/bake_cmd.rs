@@ -7,7 +7,7 @@ use crate::techniques::lightmap::bake_with_progress;
 use anyhow::{Result, bail};
 use lightlab_bake::{Method, output};
 use lightlab_scene::Scene;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// `lightlab bake --method radiosity|path`.
 pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
@@ -187,5 +187,110 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
             })
         );
     }
+    Ok(())
+}
+
+/// `lightlab bake --shard I/N`: one shard of a path-gathered light-map bake, as a part folder.
+pub fn run_shard(
+    scene: &Scene,
+    spec: &str,
+    method: &str,
+    out: &Path,
+    args: &BakeArgs,
+    shard: &str,
+) -> Result<()> {
+    use lightlab_bake::shard::{Shard, bake_part, write_part};
+    lightlab_bake::folder::check_destination(out)?;
+    let shard = Shard::parse(shard)?;
+    let Some(m) = Method::parse(method) else {
+        bail!("--shard splits light-map bakes (--method path); '{method}' cannot be sharded yet");
+    };
+    let settings = args.settings(scene, m)?;
+    let mut part = with_progress_bar(format!("{} shard {shard}", scene.name), |progress| {
+        bake_part(scene, spec, &settings, shard, progress)
+    })?;
+    part.manifest.png = args.png;
+    part.manifest.gltf = args.gltf;
+    let m = write_part(&part, out)?;
+    eprintln!(
+        "baked {} shard {shard}: texel slots {}..{} of {}, {:.2} s; wrote {}",
+        scene.name,
+        m.start,
+        m.end,
+        m.slots,
+        m.seconds,
+        out.display()
+    );
+    Ok(())
+}
+
+/// `lightlab merge PARTS... --out DIR`.
+pub fn merge(
+    parts: &[PathBuf],
+    out: &Path,
+    scene: Option<&str>,
+    load: &crate::options::LoadArgs,
+) -> Result<()> {
+    use lightlab_bake::shard::{RENDER_PART_FORMAT, part_format, read_part};
+    if part_format(&parts[0])? == RENDER_PART_FORMAT {
+        return merge_render(parts, out);
+    }
+    lightlab_bake::folder::check_destination(out)?;
+    let parts = parts
+        .iter()
+        .map(|p| read_part(p).map(|part| (p.clone(), part)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let m0 = &parts[0].1.manifest;
+    let spec = scene.unwrap_or(&m0.scene);
+    let scene = crate::load_scene(spec, load)?;
+    let lm = with_progress_bar(format!("{} merge", scene.name), |progress| {
+        lightlab_bake::shard::merge(&scene, &parts, progress)
+    })?;
+    let outputs = output::Outputs {
+        png: m0.png,
+        gltf: m0.gltf,
+    };
+    output::write(&lm, out, &scene.name, outputs)?;
+    eprintln!(
+        "merged {} parts of {} ({} pages, {} valid texels); wrote {}",
+        parts.len(),
+        scene.name,
+        lm.stats.pages,
+        lm.stats.valid_texels,
+        out.display()
+    );
+    Ok(())
+}
+
+/// `lightlab merge` of a sharded render's parts into the image `out` (.exr or .png).
+fn merge_render(parts: &[PathBuf], out: &Path) -> Result<()> {
+    use lightlab_bake::shard::{merge_render, read_render_part};
+    let ext = lightlab_core::image::extension(out);
+    if ext != "exr" && ext != "png" {
+        bail!("{}: a merged render must be .exr or .png", out.display());
+    }
+    let parts = parts
+        .iter()
+        .map(|p| read_render_part(p).map(|part| (p.clone(), part)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let img = merge_render(&parts)?;
+    let r = &parts[0].1.manifest.render;
+    let tone = lightlab_core::color::ToneMap::parse(&r.tonemap)
+        .ok_or_else(|| anyhow::anyhow!("unknown tone operator '{}' in the parts", r.tonemap))?;
+    img.write(
+        out,
+        lightlab_core::image::LdrSettings {
+            exposure: r.exposure,
+            tone,
+        },
+    )?;
+    eprintln!(
+        "merged {} parts of a {}×{} {} render; wrote {}",
+        parts.len(),
+        r.width,
+        r.height,
+        r.technique,
+        out.display()
+    );
     Ok(())
 }

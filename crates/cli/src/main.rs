@@ -84,6 +84,26 @@ enum Command {
         /// Print the bake's figures as one JSON object on the last line.
         #[arg(long)]
         json: bool,
+        /// Bake only shard I of N (counted from 0) into a part folder for `lightlab merge`;
+        /// `auto/N` reads I from JOB_COMPLETION_INDEX (Kubernetes) or SLURM_ARRAY_TASK_ID
+        /// (Slurm). Path-gathered light-maps only (see docs/scale.md).
+        #[arg(long, value_name = "I/N")]
+        shard: Option<String>,
+    },
+    /// Assemble the part folders of a sharded bake (`bake --shard I/N`) into the bake one
+    /// machine would have made; fails, writing nothing, when a part is missing, doubled or
+    /// from another bake.
+    Merge {
+        /// The part folders, in any order.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+        /// The scene, when it is not where the parts' manifests say (the bake's `--scene`).
+        #[arg(long)]
+        scene: Option<String>,
+        #[command(flatten)]
+        load: options::LoadArgs,
     },
     /// Render a scene with a technique (`reference`, `direct`, ...).
     Render(render::RenderArgs),
@@ -247,10 +267,21 @@ fn run(cli: Cli) -> Result<()> {
             options,
             load,
             json,
+            shard,
         } => {
-            let scene = load_scene(&scene, &load)?;
-            bake_cmd::run(&scene, &method, &out, &options, json)
+            let spec = scene;
+            let scene = load_scene(&spec, &load)?;
+            match shard {
+                Some(shard) => bake_cmd::run_shard(&scene, &spec, &method, &out, &options, &shard),
+                None => bake_cmd::run(&scene, &method, &out, &options, json),
+            }
         }
+        Command::Merge {
+            parts,
+            out,
+            scene,
+            load,
+        } => bake_cmd::merge(&parts, &out, scene.as_deref(), &load),
         Command::Render(args) => render::run(args),
         Command::Compare {
             a,

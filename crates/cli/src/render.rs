@@ -60,9 +60,14 @@ pub struct RenderArgs {
     pub json: bool,
     #[command(flatten)]
     pub gpu: TechniqueArgs,
-    /// Output image: .exr (linear) or .png (tone-mapped sRGB).
+    /// Output image: .exr (linear) or .png (tone-mapped sRGB); with --shard, the part folder.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// `reference` and `direct`: render only shard I of N (counted from 0; every N-th row from
+    /// row I) into the part folder --output, for `lightlab merge`; `auto/N` reads I from
+    /// JOB_COMPLETION_INDEX (Kubernetes) or SLURM_ARRAY_TASK_ID (Slurm).
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<String>,
 }
 
 /// Render with the reference path tracer (technique `reference` or `direct`), with a progress
@@ -95,7 +100,9 @@ pub fn render_reference(
 
 pub fn run(a: RenderArgs) -> Result<()> {
     let ext = lightlab_core::image::extension(&a.output);
-    if ext != "exr" && ext != "png" {
+    if a.shard.is_some() {
+        lightlab_bake::folder::check_destination(&a.output)?;
+    } else if ext != "exr" && ext != "png" {
         bail!("{}: the output must be .exr or .png", a.output.display());
     }
     // Before any work: the folder the image goes to exists.
@@ -130,6 +137,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
         camera: a.camera,
     };
     settings.validate()?;
+    if let Some(shard) = &a.shard {
+        return render_shard(&a, &scene, &settings, shard);
+    }
     let t0 = Instant::now();
     let img = render_reference(&scene, a.technique, &settings)?;
     let secs = t0.elapsed().as_secs_f64();
@@ -179,7 +189,57 @@ fn depth_range(a: &RenderArgs) -> Result<(u32, u32)> {
     }
 }
 
+/// `render --shard I/N`: the shard's rows into a part folder.
+fn render_shard(
+    a: &RenderArgs,
+    scene: &Scene,
+    settings: &RenderSettings,
+    shard: &str,
+) -> Result<()> {
+    use lightlab_bake::shard::{RenderSpec, Shard, render_part, write_render_part};
+    let shard = Shard::parse(shard)?;
+    let mut s = settings.clone();
+    if a.technique == Technique::Direct {
+        s.max_depth = 1;
+    }
+    let spec = RenderSpec {
+        technique: a.technique.name().into(),
+        width: s.width,
+        height: s.height,
+        spp: s.spp,
+        max_depth: s.max_depth,
+        min_depth: s.min_depth,
+        seed: s.seed,
+        camera: s.camera,
+        exposure: a.exposure,
+        tonemap: a.tonemap.name().into(),
+    };
+    let accel = Accel::new(scene);
+    let pt = PathTracer::new(scene, &accel);
+    let part = render_part(
+        &pt,
+        &s,
+        spec,
+        (&a.scene, scene.fingerprint()),
+        shard,
+        &|_, _| true,
+    )?;
+    write_render_part(&part, &a.output)?;
+    eprintln!(
+        "rendered {} shard {shard} ({} rows of {}, {:.2} s); wrote {}",
+        scene.name,
+        part.pixels.len() / s.width as usize,
+        s.height,
+        part.manifest.seconds,
+        a.output.display()
+    );
+    Ok(())
+}
+
 fn run_raster(a: &RenderArgs, scene: &Scene) -> Result<()> {
+    if a.shard.is_some() {
+        bail!("--shard splits path-traced renders (reference, direct), not GPU techniques");
+    }
     let ctx = crate::gpu_context()?;
     let (w, h) = (a.width, a.height.unwrap_or(a.width));
     let t0 = Instant::now();

@@ -8,6 +8,7 @@
 
 pub mod builtin;
 pub mod emitters;
+pub mod fingerprint;
 pub mod gltf_input;
 pub mod gltf_io;
 pub mod model;

@@ -494,21 +494,45 @@ impl<'a> PathTracer<'a> {
         s: &RenderSettings,
         progress: &(dyn Fn(usize, usize) -> bool + Sync),
     ) -> Result<Image, RenderError> {
+        let rows: Vec<u32> = (0..s.height).collect();
+        Ok(Image {
+            width: s.width,
+            height: s.height,
+            data: self.render_rows(s, &rows, progress)?,
+        })
+    }
+
+    /// Render the image rows `rows` (each below `s.height`) of the image `s` describes, their
+    /// pixels in the order given: a shard of a render split over machines. A pixel's value
+    /// does not depend on which other rows are rendered (see the module doc), so the rows of
+    /// several calls assemble the image `render` makes, bit for bit.
+    pub fn render_rows(
+        &self,
+        s: &RenderSettings,
+        rows: &[u32],
+        progress: &(dyn Fn(usize, usize) -> bool + Sync),
+    ) -> Result<Vec<Vec3>, RenderError> {
         s.validate()?;
         let cam: &Camera = self
             .scene
             .cameras
             .get(s.camera)
             .ok_or(RenderError::NoCamera(s.camera))?;
+        if let Some(&y) = rows.iter().find(|&&y| y >= s.height) {
+            return Err(RenderError::InvalidSettings(format!(
+                "row {y} is outside a {}-row image",
+                s.height
+            )));
+        }
         let (w, h) = (s.width, s.height);
         let aspect = w as f32 / h as f32;
         let origin = cam.position();
         let forward = cam.transform.transform_vector3(-Vec3::Z).normalize();
         let done = AtomicUsize::new(0);
         let cancelled = AtomicBool::new(false);
-        let rows: Vec<Vec<Vec3>> = (0..h)
-            .into_par_iter()
-            .map(|y| {
+        let out: Vec<Vec<Vec3>> = rows
+            .par_iter()
+            .map(|&y| {
                 if cancelled.load(Ordering::Relaxed) {
                     return vec![];
                 }
@@ -534,7 +558,7 @@ impl<'a> PathTracer<'a> {
                     })
                     .collect();
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                if !progress(n, h as usize) {
+                if !progress(n, rows.len()) {
                     cancelled.store(true, Ordering::Relaxed);
                 }
                 row
@@ -543,10 +567,6 @@ impl<'a> PathTracer<'a> {
         if cancelled.load(Ordering::Relaxed) {
             return Err(RenderError::Cancelled);
         }
-        Ok(Image {
-            width: w,
-            height: h,
-            data: rows.into_iter().flatten().collect(),
-        })
+        Ok(out.into_iter().flatten().collect())
     }
 }

@@ -1,0 +1,179 @@
+//! Sharded bakes and renders (`--shard I/N`, `lightlab merge`): the merge equals the
+//! one-machine result byte for byte, apart from the manifest's bake id and timings, and it
+//! refuses parts that do not make one whole.
+
+mod common;
+use common::{lightlab, ok, stderr};
+use std::path::{Path, PathBuf};
+
+const BAKE: &[&str] = &[
+    "--method",
+    "path",
+    "--texels-per-metre",
+    "3",
+    "--gather-samples",
+    "6",
+    "--gather-depth",
+    "3",
+];
+
+fn bake(scene: &str, out: &Path, extra: &[&str]) {
+    let mut args = vec!["bake", "--scene", scene, "--out", out.to_str().unwrap()];
+    args.extend_from_slice(BAKE);
+    args.extend_from_slice(extra);
+    ok(&lightlab(&args));
+}
+
+fn merge(parts: &[PathBuf], out: &Path) -> std::process::Output {
+    let mut args = vec!["merge".to_string()];
+    args.extend(parts.iter().map(|p| p.to_string_lossy().into_owned()));
+    args.extend(["--out".into(), out.to_string_lossy().into_owned()]);
+    let a: Vec<&str> = args.iter().map(String::as_str).collect();
+    lightlab(&a)
+}
+
+/// A manifest without its bake id and timing fields.
+fn manifest_sans_timings(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("manifest.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["integrity"]
+        .as_object_mut()
+        .unwrap()
+        .remove("bake_id")
+        .unwrap();
+    let stats = v["stats"].as_object_mut().unwrap();
+    for k in ["seconds_layout", "seconds_solve", "seconds_total"] {
+        stats.remove(k).unwrap();
+    }
+    v
+}
+
+/// Every file of `a` equals `b`'s byte for byte, the manifests apart from their timings.
+fn assert_same_bake(a: &Path, b: &Path) {
+    let names = |d: &Path| {
+        let mut n: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        n.sort();
+        n
+    };
+    assert_eq!(names(a), names(b));
+    for n in names(a).iter().filter(|n| *n != "manifest.json") {
+        let (x, y) = (
+            std::fs::read(a.join(n)).unwrap(),
+            std::fs::read(b.join(n)).unwrap(),
+        );
+        assert!(
+            x == y,
+            "{n} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
+    }
+    assert_eq!(manifest_sans_timings(a), manifest_sans_timings(b));
+}
+
+fn shards(scene: &str, dir: &Path, n: u32, extra: &[&str]) -> Vec<PathBuf> {
+    (0..n)
+        .map(|i| {
+            let p = dir.join(format!("{scene}-{n}-part-{i}"));
+            let spec = format!("{i}/{n}");
+            let mut e = vec!["--shard", spec.as_str()];
+            e.extend_from_slice(extra);
+            bake(scene, &p, &e);
+            p
+        })
+        .collect()
+}
+
+#[test]
+fn sharded_bakes_and_renders_merge_to_the_one_machine_result() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    for (scene, extra) in [("cornell", &["--png", "--gltf"][..]), ("room", &[][..])] {
+        let whole = t.join(format!("{scene}-whole"));
+        bake(scene, &whole, extra);
+        for n in [1, 3, 7] {
+            let parts = shards(scene, t, n, extra);
+            let merged = t.join(format!("{scene}-merged-{n}"));
+            // Any order of the parts.
+            let mut order = parts.clone();
+            order.reverse();
+            ok(&merge(&order, &merged));
+            assert_same_bake(&whole, &merged);
+        }
+    }
+    // A reference render, as rows of three shards.
+    let render = |extra: &[&str], out: &Path| {
+        let mut args = vec![
+            "render", "--scene", "cornell", "--width", "40", "--height", "30", "--spp", "4", "-o",
+        ];
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        ok(&lightlab(&args));
+    };
+    let whole = t.join("whole.exr");
+    render(&[], &whole);
+    let parts: Vec<PathBuf> = (0..3)
+        .map(|i| {
+            let p = t.join(format!("render-part-{i}"));
+            render(&["--shard", &format!("{i}/3")], &p);
+            p
+        })
+        .collect();
+    let merged = t.join("merged.exr");
+    ok(&merge(&parts, &merged));
+    assert!(std::fs::read(&whole).unwrap() == std::fs::read(&merged).unwrap());
+}
+
+#[test]
+fn merges_refuse_missing_doubled_and_foreign_parts_and_write_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let parts = shards("cornell", t, 3, &[]);
+    let other = shards("room", t, 3, &[]);
+    let out = t.join("merged");
+    let fails = |parts: &[PathBuf], needle: &str| {
+        let o = merge(parts, &out);
+        let e = stderr(&o);
+        assert!(!o.status.success() && e.contains(needle), "{needle}: {e}");
+        assert!(!out.exists(), "a failed merge left {}", out.display());
+    };
+    fails(&parts[..2], "part 2/3 missing");
+    fails(&[parts[1].clone()], "parts 0/3, 2/3 missing");
+    fails(
+        &[parts[0].clone(), parts[1].clone(), parts[0].clone()],
+        "part 0/3 is given twice",
+    );
+    let foreign = [parts[0].clone(), parts[1].clone(), other[2].clone()];
+    fails(
+        &foreign,
+        &format!("{} belongs to another bake", other[2].display()),
+    );
+    // A part of another shard count, and a damaged part.
+    let four = shards("cornell", t, 4, &[]);
+    fails(
+        &[parts[0].clone(), parts[1].clone(), four[2].clone()],
+        "shard count differs",
+    );
+    let values = parts[2].join("values.bin");
+    let mut bytes = std::fs::read(&values).unwrap();
+    bytes[0] ^= 1;
+    std::fs::write(&values, bytes).unwrap();
+    fails(&parts, "values.bin");
+    // Radiosity is one global iteration: refused with the reason.
+    let o = lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "radiosity",
+        "--shard",
+        "0/2",
+        "--out",
+        t.join("rad").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success() && stderr(&o).contains("radiosity cannot be sharded"));
+    assert!(!t.join("rad").exists());
+}
