@@ -20,6 +20,7 @@ pub mod prt;
 pub mod radiosity;
 pub mod repair;
 pub mod seams;
+pub mod sh_bake;
 pub mod sh_compress;
 pub mod sh_cpca;
 pub mod sh_folder;

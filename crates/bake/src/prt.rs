@@ -132,7 +132,7 @@ pub fn shade(transfer: &[f32], light: &[glam::DVec3]) -> Vec3 {
         .as_vec3()
 }
 
-fn check(s: &TransferSettings) -> Result<(), TransferError> {
+pub(crate) fn check(s: &TransferSettings) -> Result<(), TransferError> {
     if !(1..=8).contains(&s.bands) {
         return Err(TransferError::Settings(format!(
             "bands must be 1 to 8, not {}",
@@ -145,7 +145,7 @@ fn check(s: &TransferSettings) -> Result<(), TransferError> {
     Ok(())
 }
 
-fn ray_eps(p: Vec3) -> f32 {
+pub(crate) fn ray_eps(p: Vec3) -> f32 {
     2e-5 * (1.0 + p.abs().max_element())
 }
 
@@ -315,6 +315,20 @@ pub fn surface_transfer_ao(
     s: &TransferSettings,
     bounces: &[VertexTransfer],
 ) -> Result<(Vec<f32>, Vec<f32>), TransferError> {
+    transfer_ao_from(scene, accel, points, s, bounces, 0)
+}
+
+/// [`surface_transfer_ao`] of points that are the run of a longer list from index `first`:
+/// point k draws its directions as point `first + k` of the whole list would, so runs computed
+/// apart (shards) give the values of the whole.
+pub(crate) fn transfer_ao_from(
+    scene: &Scene,
+    accel: &Accel,
+    points: &[(Vec3, Vec3, Vec3)],
+    s: &TransferSettings,
+    bounces: &[VertexTransfer],
+    first: u64,
+) -> Result<(Vec<f32>, Vec<f32>), TransferError> {
     check(s)?;
     let nc = sh::num_coeffs(s.bands);
     let zonal = sh::clamped_cosine_zonal(s.bands);
@@ -333,11 +347,12 @@ pub fn surface_transfer_ao(
                 }
                 return;
             }
-            gather_point(scene, accel, p, n, ng, s, k as u64, None, o);
+            let k = first + k as u64;
+            gather_point(scene, accel, p, n, ng, s, k, None, o);
             *ao = o[0] / y0;
             let mut add = vec![0.0f32; nc];
             for prev in bounces {
-                gather_point(scene, accel, p, n, ng, s, k as u64, Some(prev), &mut add);
+                gather_point(scene, accel, p, n, ng, s, k, Some(prev), &mut add);
                 for (a, b) in o.iter_mut().zip(&add) {
                     *a += b;
                 }
@@ -460,205 +475,7 @@ impl From<TransferError> for crate::BakeError {
     }
 }
 
-/// Bake SH light-maps: unwrap, rasterise texels, probe validity, compute every valid texel's
-/// transfer (inter-reflection through per-vertex bounces), dilate each coefficient image.
-/// `progress` is called per stage and page; returning false cancels.
-pub fn bake_sh_lightmaps(
-    scene: &Scene,
-    layout: &crate::layout::LayoutSettings,
-    s: &TransferSettings,
-    progress: crate::Progress,
-) -> Result<ShLightmaps, crate::BakeError> {
-    check(s)?;
-    let mut scene = scene.clone();
-    let layout = crate::layout::unwrap_scene(&mut scene, layout)?;
-    let texels = crate::texels::rasterize(&scene, &layout);
-    let accel = Accel::new(&scene);
-    let valid = crate::texels::probe_validity(&texels, &scene, &accel, 32, 0.25, s.seed);
-    if !progress("vertex transfer", 0, 1) {
-        return Err(crate::BakeError::Cancelled);
-    }
-    // With detail, transfer is computed on the source surfaces, against the scene as the
-    // source meshes have it (inter-reflection too); texels keep the decimated layout.
-    let detail = s
-        .detail
-        .filter(|_| crate::detail::has_detail(&scene))
-        .map(|d| {
-            let ds = crate::detail::detail_scene(&scene);
-            let da = Accel::new(&ds);
-            (crate::detail::DetailProjector::new(&scene, &d), ds, da)
-        });
-    let (tscene, taccel) = match &detail {
-        Some((_, ds, da)) => (ds, da),
-        None => (&scene, &accel),
-    };
-    let sources = if matches!(s.kind, TransferKind::Interreflected { .. }) {
-        vertex_transfer(tscene, taccel, s)?.1
-    } else {
-        vec![]
-    };
-    let total_pages = texels.pages.len();
-    let nc = sh::num_coeffs(s.bands);
-    let images = nc.div_ceil(3);
-    let mut pages = vec![];
-    let mut detail_stats = detail
-        .as_ref()
-        .map(|_| crate::detail::DetailStats::default());
-    // Shooting starts from the shadowed transfer of every texel.
-    let direct_s = match s.kind {
-        TransferKind::Shooting(_) => TransferSettings {
-            kind: TransferKind::Shadowed,
-            ..*s
-        },
-        _ => *s,
-    };
-    let mut computed = vec![];
-    for (k, (page, ok)) in texels.pages.iter().zip(&valid).enumerate() {
-        if !progress("texel transfer", k, total_pages) {
-            return Err(crate::BakeError::Cancelled);
-        }
-        let idx: Vec<usize> = (0..page.samples.len())
-            .filter(|&i| page.samples[i].is_some() && ok[i])
-            .collect();
-        let surface: Vec<(usize, crate::detail::SurfacePoint)> = idx
-            .iter()
-            .map(|&i| {
-                let t = page.samples[i].as_ref().expect("filtered");
-                let ns = if s.normal_mapped {
-                    let mut rng = Rng::new(s.seed ^ 0x6e6d, ((k as u64) << 32) | i as u64);
-                    crate::texels::normal_mapped_normal(&scene, t, NORMAL_MAP_SAMPLES, &mut rng)
-                        .unwrap_or(t.ns)
-                } else {
-                    t.ns
-                };
-                let sp = crate::detail::SurfacePoint {
-                    p: t.p,
-                    ng: t.ng,
-                    ns,
-                };
-                (t.instance as usize, sp)
-            })
-            .collect();
-        let surface: Vec<crate::detail::SurfacePoint> = match &detail {
-            Some((proj, _, _)) => {
-                let (pts, st) = proj.project_all(&surface);
-                if let Some(acc) = detail_stats.as_mut() {
-                    acc.merge(&st);
-                }
-                pts
-            }
-            None => surface.into_iter().map(|(_, sp)| sp).collect(),
-        };
-        let pts: Vec<(Vec3, Vec3, Vec3)> = surface
-            .iter()
-            .map(|sp| (sp.p + sp.ng * ray_eps(sp.p), sp.ns, sp.ng))
-            .collect();
-        let (tr, ao) = surface_transfer_ao(tscene, taccel, &pts, &direct_s, &sources)?;
-        computed.push((idx, surface, tr, ao));
-    }
-    progress("texel transfer", total_pages, total_pages);
-    let mut shoot_stats = None;
-    if let TransferKind::Shooting(shoot) = s.kind {
-        // CaSHL: the bounces by shooting between all texels of all pages.
-        let mut patches = vec![];
-        let mut transfer = vec![];
-        for (k, (idx, surface, tr, _)) in computed.iter().enumerate() {
-            let page = &texels.pages[k];
-            for (j, &i) in idx.iter().enumerate() {
-                let t = page.samples[i].as_ref().expect("filtered");
-                if t.area <= 0.0 {
-                    continue;
-                }
-                patches.push(crate::cashl::ShootPatch {
-                    p: surface[j].p,
-                    n: surface[j].ns,
-                    ng: surface[j].ng,
-                    area: t.area,
-                    rho: t.albedo.element_sum() / 3.0,
-                    page: k as u32,
-                    x: i as u32 % page.width,
-                    y: i as u32 / page.width,
-                    instance: t.instance,
-                });
-                transfer.extend_from_slice(&tr[j * nc..(j + 1) * nc]);
-            }
-        }
-        let np = patches.len();
-        let st = crate::cashl::shoot(taccel, &patches, &mut transfer, nc, &shoot, &|shots| {
-            progress("shooting", shots as usize, 0)
-        })?;
-        debug_assert_eq!(np, st.patches);
-        shoot_stats = Some(st);
-        let mut it = transfer.chunks_exact(nc);
-        for (k, (idx, _, tr, _)) in computed.iter_mut().enumerate() {
-            let page = &texels.pages[k];
-            for (j, &i) in idx.iter().enumerate() {
-                if page.samples[i].as_ref().is_some_and(|t| t.area > 0.0) {
-                    tr[j * nc..(j + 1) * nc].copy_from_slice(it.next().expect("one per patch"));
-                }
-            }
-        }
-    }
-    let mut detail_pages = vec![];
-    for (k, (idx, surface, tr, ao)) in computed.iter().enumerate() {
-        let page = &texels.pages[k];
-        let n = page.samples.len();
-        // The baked normal (object space of the texel's instance) and occlusion, dilated.
-        let mut nrm = vec![Vec3::ZERO; n];
-        let mut occ = vec![Vec3::ZERO; n];
-        let mut filled = vec![false; n];
-        for (j, &i) in idx.iter().enumerate() {
-            let t = page.samples[i].as_ref().expect("filtered");
-            let m = glam::Mat3::from_mat4(scene.instances[t.instance as usize].transform);
-            nrm[i] = (m.transpose() * surface[j].ns).normalize_or(Vec3::Z);
-            occ[i] = Vec3::splat(ao[j].clamp(0.0, 1.0));
-            filled[i] = true;
-        }
-        let mut filled2 = filled.clone();
-        crate::repair::dilate(&mut nrm, &mut filled, page.width, page.height, 64);
-        // Dilation averages: keep the normal map unit length.
-        nrm.iter_mut().for_each(|n| *n = n.normalize_or(Vec3::Z));
-        crate::repair::dilate(&mut occ, &mut filled2, page.width, page.height, 64);
-        let image = |data| lightlab_core::image::Image {
-            width: page.width,
-            height: page.height,
-            data,
-        };
-        detail_pages.push(DetailPage {
-            normal: image(nrm),
-            occlusion: image(occ),
-        });
-        let mut imgs = vec![];
-        for k in 0..images {
-            let mut v = vec![Vec3::ZERO; n];
-            let mut filled = vec![false; n];
-            for (j, &i) in idx.iter().enumerate() {
-                let c = &tr[j * nc..(j + 1) * nc];
-                v[i] =
-                    Vec3::from_array([0, 1, 2].map(|ch| c.get(3 * k + ch).copied().unwrap_or(0.0)));
-                filled[i] = true;
-            }
-            crate::repair::dilate(&mut v, &mut filled, page.width, page.height, 64);
-            imgs.push(lightlab_core::image::Image {
-                width: page.width,
-                height: page.height,
-                data: v,
-            });
-        }
-        pages.push(imgs);
-    }
-    progress("texel transfer", total_pages, total_pages);
-    Ok(ShLightmaps {
-        scene,
-        layout,
-        bands: s.bands,
-        pages,
-        settings: *s,
-        detail: detail_stats,
-        shooting: shoot_stats,
-        detail_pages,
-    })
-}
+pub use crate::sh_bake::bake_sh_lightmaps;
 
 /// Render SH light-maps on the CPU under the incident radiance of `light` (SH, RGB, blended
 /// from its sample points at each hit): radiance = albedo × Σ lᵢ tᵢ, the environment where rays

@@ -136,18 +136,21 @@ pub fn balanced_ranges(cost: &[u32], count: u32) -> Vec<Range<u64>> {
 pub struct PartManifest {
     pub format: String,
     pub version: u32,
-    /// What was baked: `lightmaps`.
+    /// What was baked: `lightmaps` (path gathering) or `sh` (SH light-maps).
     pub kind: String,
     /// The scene as the command line named it (a built-in name or a file).
     pub scene: String,
     /// [`Scene::fingerprint`] in hex: the merge refuses a scene with another.
     pub scene_fingerprint: String,
-    pub settings: BakeSettings,
+    /// The bake's settings: `BakeSettings` (lightmaps) or [`ShBakeSettings`] (sh).
+    pub settings: serde_json::Value,
     pub shard: Shard,
     /// The slot range this part solved, of `slots` in all.
     pub start: u64,
     pub end: u64,
     pub slots: u64,
+    /// How many f32 values `values.bin` holds.
+    pub values: u64,
     /// Rays the solver cast for this range (the merge adds its own validity probe's).
     pub solve_rays: u64,
     pub seconds: f64,
@@ -156,22 +159,34 @@ pub struct PartManifest {
     pub png: bool,
     #[serde(default)]
     pub gltf: bool,
+    /// SH bakes: the k-means compressed copy's representatives (`--compress N`).
+    #[serde(default)]
+    pub compress: Option<usize>,
 }
 
-/// A part: its manifest and its range's values.
+/// The settings of a sharded SH light-map bake.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShBakeSettings {
+    pub layout: crate::layout::LayoutSettings,
+    pub transfer: crate::prt::TransferSettings,
+}
+
+/// A part: its manifest and its range's values. Light-maps: RGB E/π per slot of the range,
+/// then the directional ratios; SH: per gathered texel of the range, its transfer
+/// coefficients and its ambient occlusion.
 #[derive(Clone, Debug)]
 pub struct Part {
     pub manifest: PartManifest,
-    pub values: Vec<Vec3>,
-    pub directional: Option<Vec<Vec3>>,
+    pub values: Vec<f32>,
 }
 
-/// The cost of each slot, page by page: 1 where the gatherer traces paths.
-fn slot_costs(prep: &crate::Prepared) -> Vec<u32> {
-    prep.texels
+/// The cost of each slot, page by page: 1 where the solver works (a sample that passed the
+/// validity probe).
+fn slot_costs(texels: &crate::texels::Texels, valid: &[Vec<bool>]) -> Vec<u32> {
+    texels
         .pages
         .iter()
-        .zip(&prep.valid)
+        .zip(valid)
         .flat_map(|(p, v)| {
             p.samples
                 .iter()
@@ -183,6 +198,37 @@ fn slot_costs(prep: &crate::Prepared) -> Vec<u32> {
 
 fn hex(f: u64) -> String {
     format!("{f:016x}")
+}
+
+fn settings_value<T: Serialize>(t: &T) -> serde_json::Value {
+    serde_json::to_value(t).expect("settings serialise")
+}
+
+/// A part manifest with what every kind shares; the caller fills in the range and values.
+fn part_manifest(
+    kind: &str,
+    scene: (&Scene, &str),
+    settings: serde_json::Value,
+    shard: Shard,
+) -> PartManifest {
+    PartManifest {
+        format: PART_FORMAT.into(),
+        version: PART_VERSION,
+        kind: kind.into(),
+        scene: scene.1.into(),
+        scene_fingerprint: hex(scene.0.fingerprint()),
+        settings,
+        shard,
+        start: 0,
+        end: 0,
+        slots: 0,
+        values: 0,
+        solve_rays: 0,
+        seconds: 0.0,
+        png: false,
+        gltf: false,
+        compress: None,
+    }
 }
 
 /// Bake shard `shard` of the light-maps of `scene` (`scene_name` as the command line named
@@ -204,7 +250,7 @@ pub fn bake_part(
     }
     let t = Instant::now();
     let mut prep = crate::prepare(scene, settings, progress)?;
-    let costs = slot_costs(&prep);
+    let costs = slot_costs(&prep.texels, &prep.valid);
     let range = balanced_ranges(&costs, shard.count)[shard.index as usize].clone();
     // Only the range's texels are gathered: the others are masked out as if invalid.
     let mut mask = prep.valid.clone();
@@ -217,56 +263,94 @@ pub fn bake_part(
     }
     let before = prep.accel.rays_cast();
     let (values, directional) = crate::solve(&mut prep, settings, &mask, progress)?;
-    let solve_rays = prep.accel.rays_cast() - before;
-    let take = |pages: &[Vec<Vec3>]| -> Vec<Vec3> {
-        pages
+    let mut out = vec![];
+    for pages in std::iter::once(&values).chain(directional.as_ref()) {
+        let run = pages
             .iter()
             .flatten()
             .skip(range.start as usize)
-            .take((range.end - range.start) as usize)
-            .copied()
-            .collect()
-    };
+            .take((range.end - range.start) as usize);
+        out.extend(run.flat_map(|v| v.to_array()));
+    }
+    let scene_ids = (scene, scene_name);
     Ok(Part {
         manifest: PartManifest {
-            format: PART_FORMAT.into(),
-            version: PART_VERSION,
-            kind: "lightmaps".into(),
-            scene: scene_name.into(),
-            scene_fingerprint: hex(scene.fingerprint()),
-            settings: settings.clone(),
-            shard,
             start: range.start,
             end: range.end,
             slots: slot,
-            solve_rays,
+            values: out.len() as u64,
+            solve_rays: prep.accel.rays_cast() - before,
             seconds: t.elapsed().as_secs_f64(),
-            png: false,
-            gltf: false,
+            ..part_manifest("lightmaps", scene_ids, settings_value(settings), shard)
         },
-        values: take(&values),
-        directional: directional.as_deref().map(take),
+        values: out,
+    })
+}
+
+/// Bake shard `shard` of the SH light-maps of `scene`: the transfer of its range of slots.
+/// CaSHL shooting is refused (one global iteration, as radiosity).
+pub fn bake_sh_part(
+    scene: &Scene,
+    scene_name: &str,
+    settings: &ShBakeSettings,
+    shard: Shard,
+    progress: Progress,
+) -> Result<Part, BakeError> {
+    use crate::sh_bake;
+    let s = &settings.transfer;
+    if matches!(s.kind, crate::prt::TransferKind::Shooting(_)) {
+        return Err(BakeError::Settings(
+            "SH shooting (CaSHL) cannot be sharded: it is one global iteration between all \
+             texels; bake it on one machine, or shard gathered transfer (--transfer \
+             interreflected|shadowed|unshadowed)"
+                .into(),
+        ));
+    }
+    let t = Instant::now();
+    let prep = sh_bake::prepare(scene, &settings.layout, s, true, progress)?;
+    let costs = slot_costs(&prep.texels, &prep.valid);
+    let range = balanced_ranges(&costs, shard.count)[shard.index as usize].clone();
+    let mut stats = None;
+    let mut out = vec![];
+    let mut first_slot = 0u64;
+    let nc = lightlab_core::sh::num_coeffs(s.bands);
+    for k in 0..prep.texels.pages.len() {
+        let (idx, surface) = sh_bake::page_surface(&prep, s, k, &mut stats);
+        // The page's gathered texels inside the range: a run of idx.
+        let inside = |&i: &usize| range.contains(&(first_slot + i as u64));
+        let a = idx.iter().position(inside).unwrap_or(idx.len());
+        let b = a + idx[a..].iter().take_while(|&i| inside(i)).count();
+        let (tr, ao) = sh_bake::page_transfer(&prep, s, &surface[a..b], a as u64)?;
+        for j in 0..b - a {
+            out.extend_from_slice(&tr[j * nc..(j + 1) * nc]);
+            out.push(ao[j]);
+        }
+        first_slot += prep.texels.pages[k].samples.len() as u64;
+    }
+    Ok(Part {
+        manifest: PartManifest {
+            start: range.start,
+            end: range.end,
+            slots: first_slot,
+            values: out.len() as u64,
+            seconds: t.elapsed().as_secs_f64(),
+            ..part_manifest("sh", (scene, scene_name), settings_value(settings), shard)
+        },
+        values: out,
     })
 }
 
 /// Write a part folder (atomically, as every bake folder).
 pub fn write_part(part: &Part, dir: &Path) -> Result<PartManifest, BakeError> {
     folder::write(dir, |stage| {
-        let all: Vec<Vec3> = part
-            .values
-            .iter()
-            .chain(part.directional.iter().flatten())
-            .copied()
-            .collect();
-        write_floats(&stage.join(VALUES), &all)?;
+        write_f32(&stage.join(VALUES), &part.values)?;
         Ok(part.manifest.clone())
     })
 }
 
 /// Read and verify a part folder.
 pub fn read_part(dir: &Path) -> Result<Part, BakeError> {
-    let (checked, value) =
-        folder::read_manifest(dir, PART_FORMAT, PART_VERSION, "path --shard I/N")?;
+    let (checked, value) = folder::read_manifest(dir, PART_FORMAT, PART_VERSION, "path --shard")?;
     let manifest: PartManifest = checked.parse(value)?;
     if manifest.end < manifest.start || manifest.end > manifest.slots {
         return Err(BakeError::Io(format!(
@@ -277,19 +361,8 @@ pub fn read_part(dir: &Path) -> Result<Part, BakeError> {
             manifest.slots
         )));
     }
-    let n = (manifest.end - manifest.start) as usize;
-    let per = if manifest.settings.gather.directional {
-        2
-    } else {
-        1
-    };
-    let mut values = read_floats(&checked.file(VALUES)?, n * per)?;
-    let directional = (per == 2).then(|| values.split_off(n));
-    Ok(Part {
-        manifest,
-        values,
-        directional,
-    })
+    let values = read_f32(&checked.file(VALUES)?, manifest.values as usize)?;
+    Ok(Part { manifest, values })
 }
 
 /// Check that `parts` (with the folders they were read from) make one whole bake: the same
@@ -309,7 +382,10 @@ fn check_parts(parts: &[(PathBuf, Part)]) -> Result<&PartManifest, BakeError> {
                 first_dir.display()
             ))
         };
-        if m.kind != m0.kind || m.scene_fingerprint != m0.scene_fingerprint {
+        if m.kind != m0.kind {
+            return Err(foreign("kind of bake"));
+        }
+        if m.scene_fingerprint != m0.scene_fingerprint {
             return Err(foreign("scene"));
         }
         if m.settings != m0.settings {
@@ -347,14 +423,29 @@ fn check_parts(parts: &[(PathBuf, Part)]) -> Result<&PartManifest, BakeError> {
     Ok(m0)
 }
 
-/// Assemble the light-maps of `scene` from its parts: the bake [`crate::bake_lightmaps`] makes
-/// on one machine with the parts' settings, apart from its timings.
-pub fn merge(
+/// The settings a part records, parsed; an error names the part.
+fn parse_settings<T: serde::de::DeserializeOwned>(
+    dir: &Path,
+    m: &PartManifest,
+) -> Result<T, BakeError> {
+    serde_json::from_value(m.settings.clone())
+        .map_err(|e| BakeError::Io(format!("{}: its settings: {e}", dir.display())))
+}
+
+/// What every merge does first: the parts make one whole of `kind`, for `scene`.
+fn check_merge<'a>(
     scene: &Scene,
-    parts: &[(PathBuf, Part)],
-    progress: Progress,
-) -> Result<Lightmaps, BakeError> {
+    parts: &'a [(PathBuf, Part)],
+    kind: &str,
+) -> Result<&'a PartManifest, BakeError> {
     let m0 = check_parts(parts)?;
+    if m0.kind != kind {
+        return Err(BakeError::Settings(format!(
+            "{} is a part of a '{}' bake, not '{kind}'",
+            parts[0].0.display(),
+            m0.kind
+        )));
+    }
     if hex(scene.fingerprint()) != m0.scene_fingerprint {
         return Err(BakeError::Scene(format!(
             "the scene loaded as '{}' is not the one the parts were baked from (fingerprint {} \
@@ -364,36 +455,75 @@ pub fn merge(
             m0.scene_fingerprint
         )));
     }
-    let settings = m0.settings.clone();
-    let prep = crate::prepare(scene, &settings, progress)?;
-    let ranges = balanced_ranges(&slot_costs(&prep), m0.shard.count);
-    let slots: usize = prep.texels.pages.iter().map(|p| p.samples.len()).sum();
+    Ok(m0)
+}
+
+/// Each part's range, checked against the ranges this scene's slots give: `(part, range)`.
+fn checked_ranges<'a>(
+    parts: &'a [(PathBuf, Part)],
+    costs: &[u32],
+) -> Result<Vec<(&'a Part, Range<u64>)>, BakeError> {
+    let ranges = balanced_ranges(costs, parts[0].1.manifest.shard.count);
+    parts
+        .iter()
+        .map(|(dir, p)| {
+            let m = &p.manifest;
+            let r = ranges[m.shard.index as usize].clone();
+            if (m.start, m.end, m.slots) != (r.start, r.end, costs.len() as u64) {
+                return Err(BakeError::Settings(format!(
+                    "{}: covers slots {}..{} of {}, where this scene's shard {} is {}..{} of {}",
+                    dir.display(),
+                    m.start,
+                    m.end,
+                    m.slots,
+                    m.shard,
+                    r.start,
+                    r.end,
+                    costs.len()
+                )));
+            }
+            Ok((p, r))
+        })
+        .collect()
+}
+
+/// Assemble the light-maps of `scene` from its parts: the bake [`crate::bake_lightmaps`] makes
+/// on one machine with the parts' settings, apart from its timings.
+pub fn merge(
+    scene: &Scene,
+    parts: &[(PathBuf, Part)],
+    progress: Progress,
+) -> Result<Lightmaps, BakeError> {
+    let m0 = check_merge(scene, parts, "lightmaps")?;
+    let settings: BakeSettings = parse_settings(&parts[0].0, m0)?;
+    let mut prep = crate::prepare(scene, &settings, progress)?;
+    let costs = slot_costs(&prep.texels, &prep.valid);
+    let slots = costs.len();
+    let per = 3 * if settings.gather.directional { 2 } else { 1 };
     let mut flat = vec![Vec3::ZERO; slots];
     let mut flat_dir = settings.gather.directional.then(|| vec![Vec3::ONE; slots]);
     let (mut rays, mut seconds) = (0u64, 0f64);
-    for (dir, p) in parts {
-        let m = &p.manifest;
-        let r = &ranges[m.shard.index as usize];
-        if (m.start, m.end, m.slots) != (r.start, r.end, slots as u64) {
+    for (p, r) in checked_ranges(parts, &costs)? {
+        let (a, b) = (r.start as usize, r.end as usize);
+        if p.values.len() != (b - a) * per {
             return Err(BakeError::Settings(format!(
-                "{}: covers slots {}..{} of {}, where this scene's shard {} is {}..{} of {}",
-                dir.display(),
-                m.start,
-                m.end,
-                m.slots,
-                m.shard,
-                r.start,
-                r.end,
-                slots
+                "part {} holds {} values for {} slots",
+                p.manifest.shard,
+                p.values.len(),
+                b - a
             )));
         }
-        let (a, b) = (r.start as usize, r.end as usize);
-        flat[a..b].copy_from_slice(&p.values);
-        if let (Some(all), Some(d)) = (flat_dir.as_mut(), &p.directional) {
-            all[a..b].copy_from_slice(d);
+        let mut v = p.values.chunks_exact(3).map(Vec3::from_slice);
+        flat[a..b]
+            .iter_mut()
+            .for_each(|x| *x = v.next().expect("counted"));
+        if let Some(all) = flat_dir.as_mut() {
+            all[a..b]
+                .iter_mut()
+                .for_each(|x| *x = v.next().expect("counted"));
         }
-        rays += m.solve_rays;
-        seconds += m.seconds;
+        rays += p.manifest.solve_rays;
+        seconds += p.manifest.seconds;
     }
     let split = |flat: Vec<Vec3>| -> Vec<Vec<Vec3>> {
         let mut it = flat.into_iter();
@@ -404,7 +534,6 @@ pub fn merge(
             .collect()
     };
     let (values, directional) = (split(flat), flat_dir.map(split));
-    let mut prep = prep;
     prep.stats.rays = prep.accel.rays_cast() + rays;
     prep.stats.seconds_solve = seconds;
     Ok(crate::finish(
@@ -414,6 +543,57 @@ pub fn merge(
         directional,
         progress,
     ))
+}
+
+/// Assemble SH light-maps from their parts: what [`crate::prt::bake_sh_lightmaps`] makes on one
+/// machine. Returns them and the parts' summed seconds.
+pub fn merge_sh(
+    scene: &Scene,
+    parts: &[(PathBuf, Part)],
+    progress: Progress,
+) -> Result<(crate::prt::ShLightmaps, f64), BakeError> {
+    use crate::sh_bake;
+    let m0 = check_merge(scene, parts, "sh")?;
+    let settings: ShBakeSettings = parse_settings(&parts[0].0, m0)?;
+    let s = &settings.transfer;
+    let prep = sh_bake::prepare(scene, &settings.layout, s, false, progress)?;
+    let costs = slot_costs(&prep.texels, &prep.valid);
+    let nc = lightlab_core::sh::num_coeffs(s.bands);
+    // Every gathered texel's (transfer, occlusion), by slot.
+    let mut per_slot: Vec<Option<&[f32]>> = vec![None; costs.len()];
+    let mut seconds = 0.0;
+    for (p, r) in checked_ranges(parts, &costs)? {
+        let gathered: Vec<usize> = (r.start as usize..r.end as usize)
+            .filter(|&i| costs[i] > 0)
+            .collect();
+        if p.values.len() != gathered.len() * (nc + 1) {
+            return Err(BakeError::Settings(format!(
+                "part {} holds {} values for {} texels",
+                p.manifest.shard,
+                p.values.len(),
+                gathered.len()
+            )));
+        }
+        for (slot, v) in gathered.into_iter().zip(p.values.chunks_exact(nc + 1)) {
+            per_slot[slot] = Some(v);
+        }
+        seconds += p.manifest.seconds;
+    }
+    let mut stats = sh_bake::detail_stats(&prep);
+    let mut computed = vec![];
+    let mut first = 0usize;
+    for k in 0..prep.texels.pages.len() {
+        let (idx, surface) = sh_bake::page_surface(&prep, s, k, &mut stats);
+        let (mut tr, mut ao) = (Vec::with_capacity(idx.len() * nc), vec![]);
+        for &i in &idx {
+            let v = per_slot[first + i].expect("every gathered slot is in a checked range");
+            tr.extend_from_slice(&v[..nc]);
+            ao.push(v[nc]);
+        }
+        first += prep.texels.pages[k].samples.len();
+        computed.push((idx, surface, tr, ao));
+    }
+    Ok((sh_bake::finish(prep, s, &computed, stats, None), seconds))
 }
 
 /// The manifest format of a part folder (`PART_FORMAT` or `RENDER_PART_FORMAT`), to tell
@@ -513,38 +693,33 @@ pub fn render_part(
     })
 }
 
-fn write_floats(path: &Path, v: &[Vec3]) -> Result<(), BakeError> {
-    let mut bytes = Vec::with_capacity(12 * v.len());
-    for c in v.iter().flat_map(|v| v.to_array()) {
-        bytes.extend_from_slice(&c.to_le_bytes());
-    }
+fn write_f32(path: &Path, v: &[f32]) -> Result<(), BakeError> {
+    let bytes: Vec<u8> = v.iter().flat_map(|c| c.to_le_bytes()).collect();
     std::fs::write(path, bytes).map_err(|e| BakeError::Io(format!("{}: {e}", path.display())))
 }
 
-fn read_floats(path: &Path, expected: usize) -> Result<Vec<Vec3>, BakeError> {
+fn read_f32(path: &Path, expected: usize) -> Result<Vec<f32>, BakeError> {
     let bytes =
         std::fs::read(path).map_err(|e| BakeError::Io(format!("{}: {e}", path.display())))?;
-    if bytes.len() != expected * 12 {
+    if bytes.len() != expected * 4 {
         return Err(BakeError::Io(format!(
-            "{}: {} bytes, where its manifest needs {} values ({} bytes)",
+            "{}: {} bytes, where its manifest records {} values ({} bytes)",
             path.display(),
             bytes.len(),
             expected,
-            expected * 12
+            expected * 4
         )));
     }
     Ok(bytes
-        .chunks_exact(12)
-        .map(|b| {
-            let f = |i: usize| f32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
-            Vec3::new(f(0), f(4), f(8))
-        })
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect())
 }
 
 pub fn write_render_part(part: &RenderPart, dir: &Path) -> Result<(), BakeError> {
     folder::write(dir, |stage| {
-        write_floats(&stage.join(PIXELS), &part.pixels)?;
+        let flat: Vec<f32> = part.pixels.iter().flat_map(|v| v.to_array()).collect();
+        write_f32(&stage.join(PIXELS), &flat)?;
         Ok(part.manifest.clone())
     })
     .map(|_| ())
@@ -558,7 +733,8 @@ pub fn read_render_part(dir: &Path) -> Result<RenderPart, BakeError> {
     let shard = Shard::new(manifest.shard.index, manifest.shard.count)
         .map_err(|e| BakeError::Io(format!("{}: shard {e}", dir.display())))?;
     let n = shard_rows(h, shard).len() * w as usize;
-    let pixels = read_floats(&checked.file(PIXELS)?, n)?;
+    let flat = read_f32(&checked.file(PIXELS)?, 3 * n)?;
+    let pixels = flat.chunks_exact(3).map(Vec3::from_slice).collect();
     Ok(RenderPart { manifest, pixels })
 }
 

@@ -190,7 +190,8 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
     Ok(())
 }
 
-/// `lightlab bake --shard I/N`: one shard of a path-gathered light-map bake, as a part folder.
+/// `lightlab bake --shard I/N`: one shard of a path-gathered light-map bake or of an SH
+/// light-map bake, as a part folder.
 pub fn run_shard(
     scene: &Scene,
     spec: &str,
@@ -199,18 +200,35 @@ pub fn run_shard(
     args: &BakeArgs,
     shard: &str,
 ) -> Result<()> {
-    use lightlab_bake::shard::{Shard, bake_part, write_part};
+    use lightlab_bake::shard::{ShBakeSettings, Shard, bake_part, bake_sh_part, write_part};
     lightlab_bake::folder::check_destination(out)?;
     let shard = Shard::parse(shard)?;
-    let Some(m) = Method::parse(method) else {
-        bail!("--shard splits light-map bakes (--method path); '{method}' cannot be sharded yet");
+    let prefix = format!("{} shard {shard}", scene.name);
+    let part = if ["sh", "shl", "prt-textured"].contains(&method) {
+        let settings = ShBakeSettings {
+            layout: args.layout(scene),
+            transfer: args.transfer_settings()?,
+        };
+        let mut p = with_progress_bar(prefix, |progress| {
+            bake_sh_part(scene, spec, &settings, shard, progress)
+        })?;
+        p.manifest.compress = args.compress;
+        p
+    } else {
+        let Some(m) = Method::parse(method) else {
+            bail!(
+                "--shard splits light-map (path) and SH light-map (sh) bakes; '{method}' cannot \
+                 be sharded"
+            );
+        };
+        let settings = args.settings(scene, m)?;
+        let mut p = with_progress_bar(prefix, |progress| {
+            bake_part(scene, spec, &settings, shard, progress)
+        })?;
+        p.manifest.png = args.png;
+        p.manifest.gltf = args.gltf;
+        p
     };
-    let settings = args.settings(scene, m)?;
-    let mut part = with_progress_bar(format!("{} shard {shard}", scene.name), |progress| {
-        bake_part(scene, spec, &settings, shard, progress)
-    })?;
-    part.manifest.png = args.png;
-    part.manifest.gltf = args.gltf;
     let m = write_part(&part, out)?;
     eprintln!(
         "baked {} shard {shard}: texel slots {}..{} of {}, {:.2} s; wrote {}",
@@ -243,6 +261,9 @@ pub fn merge(
     let m0 = &parts[0].1.manifest;
     let spec = scene.unwrap_or(&m0.scene);
     let scene = crate::load_scene(spec, load)?;
+    if m0.kind == "sh" {
+        return merge_sh(&scene, &parts, out);
+    }
     let lm = with_progress_bar(format!("{} merge", scene.name), |progress| {
         lightlab_bake::shard::merge(&scene, &parts, progress)
     })?;
@@ -290,6 +311,37 @@ fn merge_render(parts: &[PathBuf], out: &Path) -> Result<()> {
         r.width,
         r.height,
         r.technique,
+        out.display()
+    );
+    Ok(())
+}
+
+/// The SH half of `lightlab merge`: the light-maps, and their compressed copy when the bake
+/// asked for one, written as `bake --method sh` writes them.
+fn merge_sh(
+    scene: &Scene,
+    parts: &[(PathBuf, lightlab_bake::shard::Part)],
+    out: &Path,
+) -> Result<()> {
+    let (sl, seconds) = with_progress_bar(format!("{} merge", scene.name), |progress| {
+        lightlab_bake::shard::merge_sh(scene, parts, progress)
+    })?;
+    let compressed = match parts[0].1.manifest.compress {
+        Some(n) => Some(lightlab_bake::sh_compress::compress(
+            &sl,
+            &lightlab_bake::sh_compress::CompressSettings {
+                representatives: n,
+                ..Default::default()
+            },
+        )?),
+        None => None,
+    };
+    lightlab_bake::sh_folder::write_sh(&sl, compressed.as_ref(), out, &scene.name, seconds)?;
+    eprintln!(
+        "merged {} parts of {}'s SH light-maps ({} pages); wrote {}",
+        parts.len(),
+        scene.name,
+        sl.pages.len(),
         out.display()
     );
     Ok(())

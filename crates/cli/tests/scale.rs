@@ -6,7 +6,8 @@ mod common;
 use common::{lightlab, ok, stderr};
 use std::path::{Path, PathBuf};
 
-const BAKE: &[&str] = &[
+/// Small path-gathered light-map bakes.
+const PATH: &[&str] = &[
     "--method",
     "path",
     "--texels-per-metre",
@@ -17,9 +18,23 @@ const BAKE: &[&str] = &[
     "3",
 ];
 
+/// Small SH light-map bakes (inter-reflected transfer, with its k-means compressed copy).
+const SH: &[&str] = &[
+    "--method",
+    "sh",
+    "--texels-per-metre",
+    "3",
+    "--transfer-samples",
+    "16",
+    "--compress",
+    "8",
+];
+
 fn bake(scene: &str, out: &Path, extra: &[&str]) {
     let mut args = vec!["bake", "--scene", scene, "--out", out.to_str().unwrap()];
-    args.extend_from_slice(BAKE);
+    if !extra.contains(&"sh") {
+        args.extend_from_slice(PATH);
+    }
     args.extend_from_slice(extra);
     ok(&lightlab(&args));
 }
@@ -41,9 +56,17 @@ fn manifest_sans_timings(dir: &Path) -> serde_json::Value {
         .unwrap()
         .remove("bake_id")
         .unwrap();
-    let stats = v["stats"].as_object_mut().unwrap();
-    for k in ["seconds_layout", "seconds_solve", "seconds_total"] {
-        stats.remove(k).unwrap();
+    // Light-map bakes keep their timings in `stats`, SH bakes in `seconds` (and the
+    // compressed copy's in its stats).
+    if let Some(stats) = v.get_mut("stats").and_then(|s| s.as_object_mut()) {
+        for k in ["seconds_layout", "seconds_solve", "seconds_total"] {
+            stats.remove(k).unwrap();
+        }
+    } else {
+        v.as_object_mut().unwrap().remove("seconds").unwrap();
+        if let Some(c) = v.get_mut("compressed").and_then(|c| c.get_mut("stats")) {
+            c.as_object_mut().unwrap().remove("seconds").unwrap();
+        }
     }
     v
 }
@@ -77,7 +100,7 @@ fn assert_same_bake(a: &Path, b: &Path) {
 fn shards(scene: &str, dir: &Path, n: u32, extra: &[&str]) -> Vec<PathBuf> {
     (0..n)
         .map(|i| {
-            let p = dir.join(format!("{scene}-{n}-part-{i}"));
+            let p = dir.join(format!("{scene}-{n}-{}-part-{i}", extra.len()));
             let spec = format!("{i}/{n}");
             let mut e = vec!["--shard", spec.as_str()];
             e.extend_from_slice(extra);
@@ -91,12 +114,18 @@ fn shards(scene: &str, dir: &Path, n: u32, extra: &[&str]) -> Vec<PathBuf> {
 fn sharded_bakes_and_renders_merge_to_the_one_machine_result() {
     let tmp = tempfile::tempdir().unwrap();
     let t = tmp.path();
-    for (scene, extra) in [("cornell", &["--png", "--gltf"][..]), ("room", &[][..])] {
-        let whole = t.join(format!("{scene}-whole"));
+    let cases = [
+        ("cornell", &["--png", "--gltf"][..]),
+        ("room", &[][..]),
+        ("cornell", SH),
+        ("room", SH),
+    ];
+    for (scene, extra) in cases {
+        let whole = t.join(format!("{scene}-{}-whole", extra.len()));
         bake(scene, &whole, extra);
         for n in [1, 3, 7] {
             let parts = shards(scene, t, n, extra);
-            let merged = t.join(format!("{scene}-merged-{n}"));
+            let merged = t.join(format!("{scene}-{}-merged-{n}", extra.len()));
             // Any order of the parts.
             let mut order = parts.clone();
             order.reverse();
@@ -176,4 +205,55 @@ fn merges_refuse_missing_doubled_and_foreign_parts_and_write_nothing() {
     ]);
     assert!(!o.status.success() && stderr(&o).contains("radiosity cannot be sharded"));
     assert!(!t.join("rad").exists());
+    // So is SH shooting (CaSHL); an SH part does not join a light-map bake.
+    let o = lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "sh",
+        "--transfer",
+        "shooting",
+        "--shard",
+        "0/2",
+        "--out",
+        t.join("cashl").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success() && stderr(&o).contains("shooting (CaSHL) cannot be sharded"));
+    let sh = shards("cornell", t, 3, SH);
+    fails(
+        &[parts[0].clone(), parts[1].clone(), sh[2].clone()],
+        "kind of bake differs",
+    );
+}
+
+/// The Slurm scripts of `deploy/`, run as plain processes with the variables Slurm sets: four
+/// array tasks, then the merge, equal the one-machine bake (`bench/slurm_shards.sh` runs the
+/// same scripts under a real Slurm).
+#[test]
+fn the_slurm_scripts_bake_and_merge_as_one_machine_does() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let script = |name: &str, task: Option<u32>| {
+        let mut c = std::process::Command::new("sh");
+        c.arg(root.join("deploy/slurm").join(name))
+            .env("LIGHTLAB", env!("CARGO_BIN_EXE_lightlab"))
+            .env("SCENE", "room")
+            .env("WORK", t)
+            .env("SHARDS", "4")
+            .env("BAKE_ARGS", PATH.join(" "))
+            .env_remove("JOB_COMPLETION_INDEX");
+        if let Some(i) = task {
+            c.env("SLURM_ARRAY_TASK_ID", i.to_string());
+        }
+        ok(&c.output().expect("sh runs"));
+    };
+    for i in 0..4 {
+        script("bake.sbatch", Some(i));
+    }
+    script("merge.sbatch", None);
+    let whole = t.join("whole");
+    bake("room", &whole, &[]);
+    assert_same_bake(&whole, &t.join("baked"));
 }
