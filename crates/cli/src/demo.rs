@@ -294,7 +294,12 @@ fn report_html(rows: &[Row], quality: Quality, total: f64) -> String {
         total
     ));
     for e in crate::technique::REGISTRY {
-        h.push_str(&format!("<li><code>{}</code>: {}</li>", e.name, e.about));
+        h.push_str(&format!(
+            "<li><code>{}</code>: {} (sky light: {})</li>",
+            e.name,
+            e.about,
+            e.family.sky_term()
+        ));
     }
     h.push_str("</ul>");
     let mut scene = "";

@@ -26,6 +26,9 @@ pub struct RenderArgs {
     /// `shl-normalmapped` (transfer × the scene's lights projected on SH); the light
     /// propagation volumes `lpv` and `lpv-faithful` (shadow-mapped direct light + one bounce
     /// from the volume). The light-map and SH techniques read `--baked DIR` or bake first.
+    /// The sky's diffuse light: traced (reference, direct); SH irradiance occluded through
+    /// shadow-mapped sky directions (the Phong and LPV techniques, `--sky-occlusion`); baked
+    /// (lightmap, lightmap+phong); in the SH transfer (prt-*, shl*).
     #[arg(long, default_value = "reference")]
     pub technique: Technique,
     #[arg(long, default_value_t = 256)]

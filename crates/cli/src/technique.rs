@@ -43,6 +43,25 @@ pub enum Family {
     Debug,
 }
 
+impl Family {
+    /// How the family's images get the sky's diffuse light (the environment, or a constant
+    /// ambient), for the report and `--help` (issue 22).
+    pub fn sky_term(self) -> &'static str {
+        match self {
+            Family::PathTraced => "traced: every sky ray is occluded exactly",
+            Family::Phong => {
+                "SH irradiance occluded through 64 shadow-mapped sky directions (--sky-occlusion)"
+            }
+            Family::Lightmap => "baked into the light-map, occluded and bounced by the bake",
+            Family::Sh => "SH transfer: shadowed (and inter-reflected) by the bake",
+            Family::Lpv => {
+                "SH irradiance occluded as the Phong techniques'; the volume adds the lights' bounce"
+            }
+            Family::Debug => "none",
+        }
+    }
+}
+
 /// One technique: its name on the command line, its family and a line about it.
 pub struct Entry {
     pub technique: Technique,
