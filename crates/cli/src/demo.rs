@@ -185,7 +185,7 @@ fn demo_techniques(scene: &str) -> Vec<Technique> {
     if scene == "prt" {
         families.push(Family::Sh);
     }
-    if matches!(scene, "bush" | "cornell" | "room") {
+    if matches!(scene, "bush" | "cornell" | "room" | "atrium") {
         families.push(Family::Lpv);
     }
     families.into_iter().flat_map(Technique::of).collect()
@@ -197,6 +197,7 @@ fn lightmap_density(scene: &str) -> Option<f32> {
         "cornell" => Some(32.0),
         "room" => Some(10.0),
         "shadows" => Some(8.0),
+        "atrium" => Some(4.0),
         _ => None,
     }
 }

@@ -8,6 +8,7 @@
 //! | `bush` | ≈20,000 alpha-tested translucent leaf triangles on branches, lit by the sun |
 //! | `prt` | a ridged torus knot (≈86k triangles, deep self-occlusion) and a coarse copy, env-lit |
 //! | `spheres` | spheres and a torus of different materials under an environment map |
+//! | `atrium` | a two-storey colonnade around a sunlit courtyard, with coloured banners |
 
 pub mod geom;
 
@@ -18,7 +19,9 @@ use lightlab_core::image::Image;
 use lightlab_core::sampling::{Rng, uniform_sphere};
 
 /// Names of the built-in scenes, in the order `lightlab scenes` lists them.
-pub const NAMES: [&str; 6] = ["cornell", "room", "shadows", "bush", "prt", "spheres"];
+pub const NAMES: [&str; 7] = [
+    "cornell", "room", "shadows", "bush", "prt", "spheres", "atrium",
+];
 
 /// One-line description of a built-in scene.
 pub fn describe(name: &str) -> Option<&'static str> {
@@ -29,6 +32,9 @@ pub fn describe(name: &str) -> Option<&'static str> {
         "bush" => "procedural bush of ~20k alpha-tested translucent leaf triangles, sunlit",
         "prt" => "ridged torus knot (~86k tris) and a coarse copy on a plane, environment-lit",
         "spheres" => "spheres and a torus with different materials under an environment map",
+        "atrium" => {
+            "two-storey colonnade around a sunlit courtyard, coloured banners (Sponza-like)"
+        }
         _ => return None,
     })
 }
@@ -42,6 +48,7 @@ pub fn builtin(name: &str) -> Option<Scene> {
         "bush" => bush(),
         "prt" => prt(),
         "spheres" => spheres(),
+        "atrium" => atrium(),
         _ => return None,
     };
     s.name = name.into();
@@ -311,6 +318,178 @@ fn room() -> Scene {
         Vec3::new(1.5, 0.9, -0.8),
         Vec3::Y,
         60f32.to_radians(),
+    ));
+    s
+}
+
+/// A Sponza-like atrium (issue 22): a 16 × 8 m courtyard open to the sky, ringed by a
+/// two-storey gallery 2 m deep (columns every 2 m, lintels, floor slabs, outer walls, a
+/// roof), with four coloured banners hanging in the upper gallery. The sun (elevation 53°)
+/// lights half the courtyard and reaches into the north gallery; everything else is lit by
+/// the sky and by bounces, so indirect light and sky occlusion dominate.
+fn atrium() -> Scene {
+    let mut s = Scene::default();
+    let stone = s.add_material(Material::diffuse("stone", Vec3::new(0.62, 0.57, 0.47)));
+    let paving = s.add_material(Material::diffuse("paving", Vec3::new(0.5, 0.46, 0.4)));
+    let plaster = s.add_material(Material::diffuse("plaster", Vec3::splat(0.72)));
+    let b = |name: &str, min: Vec3, max: Vec3, m| aabb_box(name, min, max, m);
+    // Courtyard x ∈ [−8, 8], z ∈ [−4, 4]; galleries out to |x| = 10, |z| = 6; storeys at
+    // 0–3.3 m (slab 3.3–3.6) and 3.6–7 m (roof 7–7.3).
+    let (cx, cz, ox, oz) = (8.0, 4.0, 10.0, 6.0);
+    let t = 0.3;
+    let mut parts = vec![
+        b(
+            "ground",
+            Vec3::new(-ox - t, -0.2, -oz - t),
+            Vec3::new(ox + t, 0.0, oz + t),
+            paving,
+        ),
+        b(
+            "wall_west",
+            Vec3::new(-ox - t, 0.0, -oz - t),
+            Vec3::new(-ox, 7.3, oz + t),
+            plaster,
+        ),
+        b(
+            "wall_east",
+            Vec3::new(ox, 0.0, -oz - t),
+            Vec3::new(ox + t, 7.3, oz + t),
+            plaster,
+        ),
+        b(
+            "wall_north",
+            Vec3::new(-ox, 0.0, oz),
+            Vec3::new(ox, 7.3, oz + t),
+            plaster,
+        ),
+        b(
+            "wall_south",
+            Vec3::new(-ox, 0.0, -oz - t),
+            Vec3::new(ox, 7.3, -oz),
+            plaster,
+        ),
+    ];
+    // Each storey's slab over the gallery ring, and its lintels along the courtyard's edge.
+    for (level, (y0, y1)) in [(3.3, 3.6), (7.0, 7.3)].into_iter().enumerate() {
+        let name = |what: &str| format!("{what}_{level}");
+        parts.extend([
+            b(
+                &name("slab_north"),
+                Vec3::new(-ox, y0, cz),
+                Vec3::new(ox, y1, oz),
+                stone,
+            ),
+            b(
+                &name("slab_south"),
+                Vec3::new(-ox, y0, -oz),
+                Vec3::new(ox, y1, -cz),
+                stone,
+            ),
+            b(
+                &name("slab_east"),
+                Vec3::new(cx, y0, -cz),
+                Vec3::new(ox, y1, cz),
+                stone,
+            ),
+            b(
+                &name("slab_west"),
+                Vec3::new(-ox, y0, -cz),
+                Vec3::new(-cx, y1, cz),
+                stone,
+            ),
+        ]);
+        let (l0, l1) = (y0 - 0.5, y0);
+        let w = 0.2;
+        parts.extend([
+            b(
+                &name("lintel_north"),
+                Vec3::new(-cx - w, l0, cz - w),
+                Vec3::new(cx + w, l1, cz + w),
+                stone,
+            ),
+            b(
+                &name("lintel_south"),
+                Vec3::new(-cx - w, l0, -cz - w),
+                Vec3::new(cx + w, l1, -cz + w),
+                stone,
+            ),
+            b(
+                &name("lintel_east"),
+                Vec3::new(cx - w, l0, -cz + w),
+                Vec3::new(cx + w, l1, cz - w),
+                stone,
+            ),
+            b(
+                &name("lintel_west"),
+                Vec3::new(-cx - w, l0, -cz + w),
+                Vec3::new(-cx + w, l1, cz - w),
+                stone,
+            ),
+        ]);
+    }
+    for p in parts {
+        s.add_mesh(p, Mat4::IDENTITY);
+    }
+    // Columns every 2 m along the courtyard's edge, on both storeys.
+    let ground_column = s.add_mesh(cylinder("column_0", 0.22, 2.8, 24, stone), Mat4::IDENTITY);
+    let upper_column = s.add_mesh(cylinder("column_1", 0.2, 2.9, 24, stone), Mat4::IDENTITY);
+    // One instance per column position instead of each mesh's instance at the origin.
+    s.instances
+        .retain(|i| i.mesh != ground_column && i.mesh != upper_column);
+    let mut spots = vec![];
+    for i in -4..=4 {
+        spots.push(Vec2::new(2.0 * i as f32, cz));
+        spots.push(Vec2::new(2.0 * i as f32, -cz));
+    }
+    for i in -1..=1 {
+        spots.push(Vec2::new(cx, 2.0 * i as f32));
+        spots.push(Vec2::new(-cx, 2.0 * i as f32));
+    }
+    for (k, p) in spots.iter().enumerate() {
+        for (mesh, y) in [(ground_column, 0.0), (upper_column, 3.6)] {
+            s.instances.push(Instance {
+                name: format!("column_{k}_{}", y > 0.0),
+                mesh,
+                transform: Mat4::from_translation(Vec3::new(p.x, y, p.y)),
+            });
+        }
+    }
+    // Banners between the upper columns, hanging from the lintel.
+    for (name, colour, x, z) in [
+        ("banner_red", Vec3::new(0.7, 0.08, 0.06), -5.0, cz),
+        ("banner_blue", Vec3::new(0.08, 0.15, 0.6), 3.0, cz),
+        ("banner_green", Vec3::new(0.1, 0.5, 0.12), -1.0, -cz),
+        ("banner_yellow", Vec3::new(0.75, 0.6, 0.1), 5.0, -cz),
+    ] {
+        let m = s.add_material(Material::diffuse(name, colour));
+        s.add_mesh(
+            b(
+                name,
+                Vec3::new(x - 0.6, 4.2, z - 0.03),
+                Vec3::new(x + 0.6, 6.5, z + 0.03),
+                m,
+            ),
+            Mat4::IDENTITY,
+        );
+    }
+    s.lights.push(sun(
+        Vec3::new(-0.35, -0.8, 0.45),
+        8.0,
+        Vec3::new(1.0, 0.95, 0.85),
+    ));
+    s.environment = Some(sky_env(
+        256,
+        Vec3::new(0.25, 0.45, 0.9),
+        Vec3::new(0.7, 0.8, 0.95),
+        Vec3::new(0.25, 0.22, 0.18),
+        &[],
+    ));
+    s.cameras.push(Camera::look_at(
+        "atrium_camera",
+        Vec3::new(-7.4, 1.7, -3.3),
+        Vec3::new(6.0, 3.4, 3.2),
+        Vec3::Y,
+        70f32.to_radians(),
     ));
     s
 }
