@@ -365,6 +365,42 @@ pub fn read_part(dir: &Path) -> Result<Part, BakeError> {
     Ok(Part { manifest, values })
 }
 
+/// Mark `shard`'s part (from `dir`) as seen; an error when it was given already.
+fn mark_seen<'a>(
+    seen: &mut [Option<&'a Path>],
+    shard: Shard,
+    dir: &'a Path,
+) -> Result<(), BakeError> {
+    let i = shard.index as usize;
+    if let Some(other) = seen.get(i).copied().flatten() {
+        return Err(BakeError::Settings(format!(
+            "part {shard} is given twice: {} and {}",
+            other.display(),
+            dir.display()
+        )));
+    }
+    if let Some(slot) = seen.get_mut(i) {
+        *slot = Some(dir);
+    }
+    Ok(())
+}
+
+/// An error naming the parts not seen, if any.
+fn none_missing(seen: &[Option<&Path>]) -> Result<(), BakeError> {
+    let missing: Vec<String> = (0..seen.len())
+        .filter(|&i| seen[i].is_none())
+        .map(|i| format!("{i}/{}", seen.len()))
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(BakeError::Settings(format!(
+        "part{} {} missing",
+        if missing.len() > 1 { "s" } else { "" },
+        missing.join(", ")
+    )))
+}
+
 /// Check that `parts` (with the folders they were read from) make one whole bake: the same
 /// kind, scene, settings and shard count, every index once. Errors name the part at fault.
 fn check_parts(parts: &[(PathBuf, Part)]) -> Result<&PartManifest, BakeError> {
@@ -394,32 +430,9 @@ fn check_parts(parts: &[(PathBuf, Part)]) -> Result<&PartManifest, BakeError> {
         if m.shard.count != m0.shard.count || m.slots != m0.slots {
             return Err(foreign("shard count"));
         }
-        let i = m.shard.index as usize;
-        if let Some(other) = seen.get(i).copied().flatten() {
-            return Err(BakeError::Settings(format!(
-                "part {} is given twice: {} and {}",
-                m.shard,
-                other.display(),
-                dir.display()
-            )));
-        }
-        if i < seen.len() {
-            seen[i] = Some(dir);
-        }
+        mark_seen(&mut seen, m.shard, dir)?;
     }
-    let missing: Vec<String> = seen
-        .iter()
-        .enumerate()
-        .filter(|(_, d)| d.is_none())
-        .map(|(i, _)| format!("{i}/{}", m0.shard.count))
-        .collect();
-    if !missing.is_empty() {
-        return Err(BakeError::Settings(format!(
-            "part{} {} missing",
-            if missing.len() > 1 { "s" } else { "" },
-            missing.join(", ")
-        )));
-    }
+    none_missing(&seen)?;
     Ok(m0)
 }
 
@@ -768,32 +781,13 @@ pub fn merge_render(
                 first_dir.display()
             )));
         }
-        let i = m.shard.index as usize;
-        if let Some(other) = seen[i] {
-            return Err(BakeError::Settings(format!(
-                "part {} is given twice: {} and {}",
-                m.shard,
-                other.display(),
-                dir.display()
-            )));
-        }
-        seen[i] = Some(dir);
+        mark_seen(&mut seen, m.shard, dir)?;
         for (k, y) in shard_rows(h, m.shard).into_iter().enumerate() {
             let (src, dst) = (k * w as usize, y as usize * w as usize);
             data[dst..dst + w as usize].copy_from_slice(&p.pixels[src..src + w as usize]);
         }
     }
-    let missing: Vec<String> = (0..seen.len())
-        .filter(|&i| seen[i].is_none())
-        .map(|i| format!("{i}/{}", m0.shard.count))
-        .collect();
-    if !missing.is_empty() {
-        return Err(BakeError::Settings(format!(
-            "part{} {} missing",
-            if missing.len() > 1 { "s" } else { "" },
-            missing.join(", ")
-        )));
-    }
+    none_missing(&seen)?;
     Ok(lightlab_core::image::Image {
         width: w,
         height: h,

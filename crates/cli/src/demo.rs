@@ -18,14 +18,14 @@ use std::time::Instant;
 pub enum Quality {
     /// Tiny images in seconds: a smoke run of the whole pipeline.
     Preview,
-    /// The default: about five minutes on two cores.
+    /// The default: about six and a half minutes on two cores.
     Low,
     /// Larger, cleaner images.
     High,
 }
 
-/// Image size and samples per scene at each quality. `low` is sized for about five minutes on
-/// a 2-core machine in total.
+/// Image size and samples per scene at each quality. `low` is sized for about six and a half
+/// minutes on a 2-core machine in total.
 fn settings_for(scene: &str, q: Quality) -> RenderSettings {
     let (w, h, spp) = match (scene, q) {
         (_, Quality::Preview) => (48, 48, 4),

@@ -201,6 +201,20 @@ fn sky_env(
     }
 }
 
+/// The clear day of `room` and `atrium`: a sun of 8 W/m² shining along `direction`, and a blue
+/// sky over a brown ground as the environment.
+fn add_clear_day(s: &mut Scene, direction: Vec3) {
+    s.lights
+        .push(sun(direction, 8.0, Vec3::new(1.0, 0.95, 0.85)));
+    s.environment = Some(sky_env(
+        256,
+        Vec3::new(0.25, 0.45, 0.9),
+        Vec3::new(0.7, 0.8, 0.95),
+        Vec3::new(0.25, 0.22, 0.18),
+        &[],
+    ));
+}
+
 fn sun(direction: Vec3, irradiance: f32, color: Vec3) -> Light {
     Light {
         name: "sun".into(),
@@ -300,18 +314,7 @@ fn room() -> Scene {
         mesh: pillar_mesh,
         transform: Mat4::from_translation(Vec3::new(0.9, 0.0, 1.1)),
     });
-    s.lights.push(sun(
-        Vec3::new(-0.75, -0.55, -0.25),
-        8.0,
-        Vec3::new(1.0, 0.95, 0.85),
-    ));
-    s.environment = Some(sky_env(
-        256,
-        Vec3::new(0.25, 0.45, 0.9),
-        Vec3::new(0.7, 0.8, 0.95),
-        Vec3::new(0.25, 0.22, 0.18),
-        &[],
-    ));
+    add_clear_day(&mut s, Vec3::new(-0.75, -0.55, -0.25));
     s.cameras.push(Camera::look_at(
         "room_camera",
         Vec3::new(-2.6, 1.7, 2.2),
@@ -472,18 +475,7 @@ fn atrium() -> Scene {
             Mat4::IDENTITY,
         );
     }
-    s.lights.push(sun(
-        Vec3::new(-0.35, -0.8, 0.45),
-        8.0,
-        Vec3::new(1.0, 0.95, 0.85),
-    ));
-    s.environment = Some(sky_env(
-        256,
-        Vec3::new(0.25, 0.45, 0.9),
-        Vec3::new(0.7, 0.8, 0.95),
-        Vec3::new(0.25, 0.22, 0.18),
-        &[],
-    ));
+    add_clear_day(&mut s, Vec3::new(-0.35, -0.8, 0.45));
     s.cameras.push(Camera::look_at(
         "atrium_camera",
         Vec3::new(-7.4, 1.7, -3.3),
