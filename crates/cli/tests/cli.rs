@@ -13,7 +13,9 @@ fn scenes_lists_one_name_per_line() {
     let names: Vec<String> = stdout(&o).lines().map(String::from).collect();
     assert_eq!(
         names,
-        ["cornell", "room", "shadows", "bush", "prt", "spheres"]
+        [
+            "cornell", "room", "shadows", "bush", "prt", "spheres", "atrium"
+        ]
     );
 }
 
@@ -295,7 +297,9 @@ fn demo_preview_writes_a_report_with_every_scene() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("report.html"));
     let html = std::fs::read_to_string(dir.path().join("report.html")).unwrap();
-    for s in ["cornell", "room", "shadows", "bush", "prt", "spheres"] {
+    for s in [
+        "cornell", "room", "shadows", "bush", "prt", "spheres", "atrium",
+    ] {
         assert!(html.contains(&format!("{s}-reference.png")), "{s}");
         assert!(dir.path().join(format!("{s}-reference.exr")).exists());
     }
@@ -305,7 +309,7 @@ fn demo_preview_writes_a_report_with_every_scene() {
         for t in ["phong", "phong-shadow-volumes", "phong-shadow-maps"] {
             assert!(html.contains(&format!("shadows-{t}.png")), "{t}");
         }
-        for s in ["bush", "cornell", "room"] {
+        for s in ["bush", "cornell", "room", "atrium"] {
             for t in ["lpv", "lpv-faithful"] {
                 assert!(html.contains(&format!("{s}-{t}.png")), "{s}-{t}");
             }
