@@ -191,35 +191,26 @@ fn merges_refuse_missing_doubled_and_foreign_parts_and_write_nothing() {
     bytes[0] ^= 1;
     std::fs::write(&values, bytes).unwrap();
     fails(&parts, "values.bin");
-    // Radiosity is one global iteration: refused with the reason.
-    let o = lightlab(&[
-        "bake",
-        "--scene",
-        "cornell",
-        "--method",
-        "radiosity",
-        "--shard",
-        "0/2",
-        "--out",
-        t.join("rad").to_str().unwrap(),
-    ]);
-    assert!(!o.status.success() && stderr(&o).contains("radiosity cannot be sharded"));
-    assert!(!t.join("rad").exists());
-    // So is SH shooting (CaSHL); an SH part does not join a light-map bake.
-    let o = lightlab(&[
-        "bake",
-        "--scene",
-        "cornell",
-        "--method",
-        "sh",
-        "--transfer",
-        "shooting",
-        "--shard",
-        "0/2",
-        "--out",
-        t.join("cashl").to_str().unwrap(),
-    ]);
-    assert!(!o.status.success() && stderr(&o).contains("shooting (CaSHL) cannot be sharded"));
+    // Radiosity and SH shooting (CaSHL) are one global iteration: refused with the reason.
+    let refused = |method: &[&str], needle: &str| {
+        let out = t.join("refused");
+        let mut args = vec!["bake", "--scene", "cornell", "--shard", "0/2"];
+        args.extend_from_slice(method);
+        args.extend(["--out", out.to_str().unwrap()]);
+        let o = lightlab(&args);
+        assert!(
+            !o.status.success() && stderr(&o).contains(needle),
+            "{}",
+            stderr(&o)
+        );
+        assert!(!out.exists());
+    };
+    refused(&["--method", "radiosity"], "radiosity cannot be sharded");
+    refused(
+        &["--method", "sh", "--transfer", "shooting"],
+        "shooting (CaSHL) cannot be sharded",
+    );
+    // An SH part does not join a light-map bake.
     let sh = shards("cornell", t, 3, SH);
     fails(
         &[parts[0].clone(), parts[1].clone(), sh[2].clone()],
