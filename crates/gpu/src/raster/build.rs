@@ -108,7 +108,10 @@ impl FrameBuffers {
     }
 }
 
-/// The frame uniforms: camera, shadow settings and the sky's SH irradiance.
+/// Sampled textures the LPV techniques' fragment stage binds (materials, shadow maps,
+/// environment maps, the volume's three, the sky occlusion's depth maps).
+const LPV_SAMPLED_TEXTURES: u32 = 17;
+
 /// The `sky` and `lpv` sources' occlusion: the sky's diffuse light (without the sun taken out of it, or
 /// a constant ambient's uniform sky) over `s.sky_occlusion` shadow-mapped directions.
 fn sky_occlusion(
@@ -133,6 +136,7 @@ fn sky_occlusion(
     super::ambient::SkyOcclusion::new(ctx, gscene, env, s.sky_occlusion)
 }
 
+/// The frame uniforms: camera, shadow settings and the sky's SH irradiance.
 fn frame_uniforms(
     scene: &Scene,
     s: &RasterSettings,
@@ -337,6 +341,15 @@ impl Renderer {
             AmbientInput::Lightmap(lm) => AmbientSource::lightmap(ctx, lm, page_size),
             AmbientInput::Sh(sh) => AmbientSource::sh(ctx, sh, scene.instances.len(), page_size),
             AmbientInput::Lpv(l, indirect_only) => {
+                // The volume's three textures beside the sky occlusion's depth maps.
+                let have = ctx.device.limits().max_sampled_textures_per_shader_stage;
+                if have < LPV_SAMPLED_TEXTURES {
+                    return Err(RasterError::Settings(format!(
+                        "the LPV techniques read {LPV_SAMPLED_TEXTURES} textures in one shader \
+                         stage; this adapter ({}) allows {have}",
+                        ctx.info.name
+                    )));
+                }
                 let aspect = s.width as f32 / s.height as f32;
                 let sun_light = sun.as_ref().map(|(l, _)| l);
                 let v = Lpv::new(ctx, scene, sun_light, l.clone(), &camera, aspect, &s.wind)?;
