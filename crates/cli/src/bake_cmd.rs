@@ -9,12 +9,41 @@ use lightlab_bake::{Method, output};
 use lightlab_scene::Scene;
 use std::path::{Path, PathBuf};
 
+/// Whether `method` bakes SH light-maps (textured PRT's data are SH light-maps too).
+fn is_sh_method(method: &str) -> bool {
+    ["sh", "shl", "prt-textured"].contains(&method)
+}
+
+/// The k-means compressed copy of SH light-maps (Fuchs §5.6) with `representatives`, if asked.
+fn compressed_copy(
+    sl: &lightlab_bake::prt::ShLightmaps,
+    representatives: Option<usize>,
+) -> Result<Option<lightlab_bake::sh_compress::CompressedSh>> {
+    let Some(n) = representatives else {
+        return Ok(None);
+    };
+    let c = lightlab_bake::sh_compress::compress(
+        sl,
+        &lightlab_bake::sh_compress::CompressSettings {
+            representatives: n,
+            ..Default::default()
+        },
+    )?;
+    let st = &c.stats;
+    eprintln!(
+        "compressed {} transfer vectors to {} representatives in {} iterations: {:.1}× smaller, \
+         rms distance {:.4}",
+        st.vectors, st.representatives, st.iterations, st.ratio, st.rms_distance
+    );
+    Ok(Some(c))
+}
+
 /// `lightlab bake --method radiosity|path`.
 pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
     // Before any work: a bake replaces its folder whole, so it must be new, empty or a bake.
     lightlab_bake::folder::check_destination(out)?;
     // Textured PRT's data are SH light-maps (transfer per light-map texel).
-    if ["sh", "shl", "prt-textured"].contains(&method) {
+    if is_sh_method(method) {
         return bake_sh(scene, out, args, json);
     }
     if method == "prt" {
@@ -149,25 +178,7 @@ fn bake_sh(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()>
             }
         );
     }
-    let compressed = match args.compress {
-        Some(n) => {
-            let c = lightlab_bake::sh_compress::compress(
-                &sl,
-                &lightlab_bake::sh_compress::CompressSettings {
-                    representatives: n,
-                    ..Default::default()
-                },
-            )?;
-            let st = &c.stats;
-            eprintln!(
-                "compressed {} transfer vectors to {} representatives in {} iterations: {:.1}× \
-                 smaller, rms distance {:.4}",
-                st.vectors, st.representatives, st.iterations, st.ratio, st.rms_distance
-            );
-            Some(c)
-        }
-        None => None,
-    };
+    let compressed = compressed_copy(&sl, args.compress)?;
     let m = write_sh(&sl, compressed.as_ref(), out, &scene.name, seconds)?;
     eprintln!(
         "baked {} in {seconds:.2} s: {} pages × {} coefficient images; wrote {}",
@@ -204,7 +215,7 @@ pub fn run_shard(
     lightlab_bake::folder::check_destination(out)?;
     let shard = Shard::parse(shard)?;
     let prefix = format!("{} shard {shard}", scene.name);
-    let part = if ["sh", "shl", "prt-textured"].contains(&method) {
+    let part = if is_sh_method(method) {
         let settings = ShBakeSettings {
             layout: args.layout(scene),
             transfer: args.transfer_settings()?,
@@ -326,16 +337,7 @@ fn merge_sh(
     let (sl, seconds) = with_progress_bar(format!("{} merge", scene.name), |progress| {
         lightlab_bake::shard::merge_sh(scene, parts, progress)
     })?;
-    let compressed = match parts[0].1.manifest.compress {
-        Some(n) => Some(lightlab_bake::sh_compress::compress(
-            &sl,
-            &lightlab_bake::sh_compress::CompressSettings {
-                representatives: n,
-                ..Default::default()
-            },
-        )?),
-        None => None,
-    };
+    let compressed = compressed_copy(&sl, parts[0].1.manifest.compress)?;
     lightlab_bake::sh_folder::write_sh(&sl, compressed.as_ref(), out, &scene.name, seconds)?;
     eprintln!(
         "merged {} parts of {}'s SH light-maps ({} pages); wrote {}",

@@ -73,6 +73,15 @@ pub struct RenderArgs {
     pub shard: Option<String>,
 }
 
+/// The path tracer's settings for `technique`: `direct` stops at the first scattering event.
+fn path_settings(technique: Technique, settings: &RenderSettings) -> RenderSettings {
+    let mut s = settings.clone();
+    if technique == Technique::Direct {
+        s.max_depth = 1;
+    }
+    s
+}
+
 /// Render with the reference path tracer (technique `reference` or `direct`), with a progress
 /// bar on stderr.
 pub fn render_reference(
@@ -80,10 +89,7 @@ pub fn render_reference(
     technique: Technique,
     settings: &RenderSettings,
 ) -> Result<Image> {
-    let mut s = settings.clone();
-    if technique == Technique::Direct {
-        s.max_depth = 1;
-    }
+    let s = path_settings(technique, settings);
     let accel = Accel::new(scene);
     let pt = PathTracer::new(scene, &accel);
     let bar = ProgressBar::new(s.height as u64);
@@ -201,10 +207,7 @@ fn render_shard(
 ) -> Result<()> {
     use lightlab_bake::shard::{RenderSpec, Shard, render_part, write_render_part};
     let shard = Shard::parse(shard)?;
-    let mut s = settings.clone();
-    if a.technique == Technique::Direct {
-        s.max_depth = 1;
-    }
+    let s = path_settings(a.technique, settings);
     let spec = RenderSpec {
         technique: a.technique.name().into(),
         width: s.width,
