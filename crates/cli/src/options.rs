@@ -256,6 +256,11 @@ pub struct RasterArgs {
     /// reflect their neighbours.
     #[arg(long)]
     pub dynamic_env: bool,
+    /// Frames between updates of the dynamic maps in `view` and `bench frame` (1: every frame,
+    /// so that they follow moving objects; 0: only when the renderer is made). A still image
+    /// (`render`, `demo`) makes its maps once.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub dynamic_env_every: u32,
     /// Whether the environment's sun casts shadows (on) or stays in the unshadowed ambient
     /// (off): its bright region becomes a directional light with shadows for the diffuse term
     /// of the Phong and LPV techniques (specular reflections keep it in the environment map).
@@ -296,6 +301,7 @@ impl Default for RasterArgs {
             env_prefilter: EnvPrefilter::Auto,
             env_diffuse: EnvDiffuse::Sh,
             dynamic_env: false,
+            dynamic_env_every: 1,
             env_sun: "on".into(),
             sky_occlusion: 64,
             refraction: Refraction::Two,
@@ -348,6 +354,7 @@ impl RasterArgs {
             env_sun: self.env_sun == "on",
             sky_occlusion: self.sky_occlusion,
             dynamic_env: self.dynamic_env,
+            dynamic_env_every: self.dynamic_env_every,
             refraction: self.refraction,
             env_texels: self.env_texels,
             ..Default::default()

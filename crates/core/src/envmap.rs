@@ -250,22 +250,51 @@ fn lobe_width(lobe: Lobe, roughness: f32) -> f32 {
     }
 }
 
-/// Samples a lobe needs: a lobe a few source texels wide is averaged well by few (each read
-/// is filtered), up to `max` for wide ones.
-fn lobe_samples(src: &Source, lobe: Lobe, roughness: f32, max: u32) -> u32 {
-    let texel = src.texel_solid_angle(0).sqrt();
+/// Samples a lobe needs over a source whose texels have solid angle `texel_solid_angle`: a
+/// lobe a few source texels wide is averaged well by few (each read is filtered), up to `max`
+/// for wide ones.
+pub fn lobe_samples(texel_solid_angle: f32, lobe: Lobe, roughness: f32, max: u32) -> u32 {
+    let texel = texel_solid_angle.sqrt();
     let ratio = lobe_width(lobe, roughness) / texel;
     ((16.0 * ratio * ratio).ceil() as u32).clamp(16.min(max), max)
 }
 
-/// The face size at which a level's lobe is resolved (a texel under a third of its width).
-fn level_size(settings: &EnvSettings, lobe: Lobe, roughness: f32) -> u32 {
+/// The face size at which a level is computed before it is upsampled to `settings.size`: the
+/// full size for the mirror level, else the size that resolves the lobe (a texel under a
+/// third of its width).
+pub fn level_size(settings: &EnvSettings, lobe: Lobe, roughness: f32) -> u32 {
+    let size = settings.size.max(1);
+    if roughness <= 0.0 {
+        return size;
+    }
     let width = lobe_width(lobe, roughness);
     let per_face = (4.0 * PI / settings.param.faces() as f32).sqrt();
     let need = (3.0 * per_face / width.max(1e-6)).ceil() as u32;
-    need.next_power_of_two()
-        .clamp(16, settings.size)
-        .min(settings.size)
+    need.next_power_of_two().clamp(16, size).min(size)
+}
+
+/// The sides of a face's mip chain, as the GPU halves them (⌊n/2⌋ down to 1).
+pub fn mip_sizes(size: u32) -> Vec<u32> {
+    let mut sizes = vec![size.max(1)];
+    while let Some(&n) = sizes.last().filter(|n| **n > 1) {
+        sizes.push(n / 2);
+    }
+    sizes
+}
+
+/// The texels' solid angles of every level of a face's mip chain but the last, one level
+/// after the other (row-major): the weights of [`mip_chain`]'s 2×2 steps, for a GPU port.
+pub fn mip_weights(param: Param, size: u32) -> Vec<f32> {
+    let sizes = mip_sizes(size);
+    let mut w = vec![];
+    for &n in &sizes[..sizes.len() - 1] {
+        for y in 0..n {
+            for x in 0..n {
+                w.push(param.texel_solid_angle(x, y, n, n) as f32);
+            }
+        }
+    }
+    w
 }
 
 /// One face of one level at face size `n`.
@@ -352,20 +381,9 @@ pub fn prefilter(img: &Image, scale: f32, settings: &EnvSettings) -> EnvMaps {
     let mut layers = vec![];
     for &lobe in &settings.lobes {
         for &r in &settings.roughness {
-            let n = if r <= 0.0 {
-                size
-            } else {
-                level_size(
-                    &EnvSettings {
-                        size,
-                        ..settings.clone()
-                    },
-                    lobe,
-                    r,
-                )
-            };
+            let n = level_size(settings, lobe, r);
             let level = EnvSettings {
-                samples: lobe_samples(&src, lobe, r, settings.samples),
+                samples: lobe_samples(src.texel_solid_angle(0), lobe, r, settings.samples),
                 ..settings.clone()
             };
             for face in 0..faces {

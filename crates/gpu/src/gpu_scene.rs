@@ -48,6 +48,12 @@ pub struct UvRect {
 /// One instance: a range of the index buffer with one material.
 #[derive(Clone, Debug)]
 pub struct Draw {
+    /// Where the instance's vertices start in the vertex buffer.
+    pub first_vertex: u32,
+    /// Its light-map rectangle, if it has one.
+    pub rect: Option<UvRect>,
+    /// The instance's transform when its vertices were written.
+    pub transform: glam::Mat4,
     pub first_index: u32,
     pub index_count: u32,
     pub material: usize,
@@ -214,7 +220,7 @@ impl GpuScene {
         let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("scene vertices"),
             contents: bytemuck::cast_slice(&g.vertices),
-            usage: wgpu::BufferUsages::VERTEX,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
         });
         let ib = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("scene indices"),
@@ -249,60 +255,17 @@ impl Geometry {
         let mut indices: Vec<u32> = vec![];
         let mut draws = vec![];
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for (ii, inst) in scene.instances.iter().enumerate() {
-            let mesh = &scene.meshes[inst.mesh];
+        for ii in 0..scene.instances.len() {
             let rect = rects.and_then(|r| r.get(ii).copied().flatten());
-            let nm = inst.normal_matrix();
-            let m3 = Mat3::from_mat4(inst.transform);
-            let flip = if m3.determinant() < 0.0 { -1.0 } else { 1.0 };
             let base = vertices.len() as u32;
-            let (mut dlo, mut dhi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-            let mut world = Vec::with_capacity(mesh.positions.len());
-            for (i, p) in mesh.positions.iter().enumerate() {
-                let w = inst.transform.transform_point3(*p);
-                world.push(w);
-                dlo = dlo.min(w);
-                dhi = dhi.max(w);
-                let n = mesh
-                    .normals
-                    .get(i)
-                    .map(|n| (nm * *n).normalize_or_zero())
-                    .unwrap_or(Vec3::Y);
-                let t = mesh
-                    .tangents
-                    .get(i)
-                    .map_or(Vec4::new(1.0, 0.0, 0.0, 1.0), |t| {
-                        (m3 * t.truncate()).normalize_or_zero().extend(t.w * flip)
-                    });
-                vertices.push(Vertex {
-                    position: w.to_array(),
-                    normal: n.to_array(),
-                    tangent: t.to_array(),
-                    uv0: mesh.uv0.get(i).map_or([0.0; 2], |u| u.to_array()),
-                    uv1: {
-                        let u = mesh
-                            .uv1
-                            .as_ref()
-                            .and_then(|u| u.get(i))
-                            .map_or([0.0; 2], |u| u.to_array());
-                        match rect {
-                            Some(r) => [
-                                r.page as f32 + r.offset[0] + u[0] * r.scale[0],
-                                r.offset[1] + u[1] * r.scale[1],
-                            ],
-                            None => u,
-                        }
-                    },
-                    color: mesh.colors.get(i).map_or([u16::MAX; 4], |c| {
-                        c.to_array()
-                            .map(|x| (x.clamp(0.0, 1.0) * 65535.0).round() as u16)
-                    }),
-                });
-            }
+            let (verts, world, flip) = instance_vertices(scene, ii, rect);
+            vertices.extend(verts);
+            let (dlo, dhi) = world_bounds(&world);
+            let mesh = &scene.meshes[scene.instances[ii].mesh];
             let first_index = indices.len() as u32;
             // A mirroring transform flips the winding: restore counter-clockwise.
             for t in mesh.indices.chunks_exact(3) {
-                if flip < 0.0 {
+                if flip {
                     indices.extend([base + t[0], base + t[2], base + t[1]]);
                 } else {
                     indices.extend([base + t[0], base + t[1], base + t[2]]);
@@ -310,18 +273,19 @@ impl Geometry {
             }
             lo = lo.min(dlo);
             hi = hi.max(dhi);
-            let material = &scene.materials[mesh.material];
-            let casts_volume = material.alpha_mode == AlphaMode::Opaque;
             let local: Vec<u32> = indices[first_index as usize..]
                 .iter()
                 .map(|i| i - base)
                 .collect();
             draws.push(Draw {
+                first_vertex: base,
+                rect,
+                transform: scene.instances[ii].transform,
                 first_index,
                 index_count: mesh.indices.len() as u32,
                 material: mesh.material,
                 bounds: (dlo, dhi),
-                volume: casts_volume.then(|| VolumeMesh::new(&world, &local)),
+                volume: casts_volume(scene, ii).then(|| VolumeMesh::new(&world, &local)),
             });
         }
         Geometry {
@@ -331,6 +295,102 @@ impl Geometry {
             lo,
             hi,
         }
+    }
+}
+
+/// Whether instance `ii` casts shadow volumes (alpha-masked materials cannot).
+fn casts_volume(scene: &Scene, ii: usize) -> bool {
+    let mesh = &scene.meshes[scene.instances[ii].mesh];
+    scene.materials[mesh.material].alpha_mode == AlphaMode::Opaque
+}
+
+fn world_bounds(world: &[Vec3]) -> (Vec3, Vec3) {
+    world.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), w| (lo.min(*w), hi.max(*w)),
+    )
+}
+
+/// Instance `ii`'s vertices in world space (light-map UVs placed in `rect` when given), its
+/// world positions, and whether its transform mirrors (which flips the winding).
+fn instance_vertices(
+    scene: &Scene,
+    ii: usize,
+    rect: Option<UvRect>,
+) -> (Vec<Vertex>, Vec<Vec3>, bool) {
+    let inst = &scene.instances[ii];
+    let mesh = &scene.meshes[inst.mesh];
+    let nm = inst.normal_matrix();
+    let m3 = Mat3::from_mat4(inst.transform);
+    let flip = if m3.determinant() < 0.0 { -1.0 } else { 1.0 };
+    let mut vertices = Vec::with_capacity(mesh.positions.len());
+    let mut world = Vec::with_capacity(mesh.positions.len());
+    for (i, p) in mesh.positions.iter().enumerate() {
+        let w = inst.transform.transform_point3(*p);
+        world.push(w);
+        let n = mesh
+            .normals
+            .get(i)
+            .map(|n| (nm * *n).normalize_or_zero())
+            .unwrap_or(Vec3::Y);
+        let t = mesh
+            .tangents
+            .get(i)
+            .map_or(Vec4::new(1.0, 0.0, 0.0, 1.0), |t| {
+                (m3 * t.truncate()).normalize_or_zero().extend(t.w * flip)
+            });
+        let uv1 = mesh
+            .uv1
+            .as_ref()
+            .and_then(|u| u.get(i))
+            .map_or([0.0; 2], |u| u.to_array());
+        vertices.push(Vertex {
+            position: w.to_array(),
+            normal: n.to_array(),
+            tangent: t.to_array(),
+            uv0: mesh.uv0.get(i).map_or([0.0; 2], |u| u.to_array()),
+            uv1: match rect {
+                Some(r) => [
+                    r.page as f32 + r.offset[0] + uv1[0] * r.scale[0],
+                    r.offset[1] + uv1[1] * r.scale[1],
+                ],
+                None => uv1,
+            },
+            color: mesh.colors.get(i).map_or([u16::MAX; 4], |c| {
+                c.to_array()
+                    .map(|x| (x.clamp(0.0, 1.0) * 65535.0).round() as u16)
+            }),
+        });
+    }
+    (vertices, world, flip < 0.0)
+}
+
+impl GpuScene {
+    /// Instance `i` moved to its transform in `scene` (same meshes as when uploaded): its
+    /// vertices are rewritten, and its bounds, shadow volume and the scene's bounds follow.
+    /// A move that turns a transform into a mirroring one (or back) keeps the old winding.
+    pub fn move_instance(&mut self, queue: &wgpu::Queue, scene: &Scene, i: usize) {
+        let Some(d) = self.draws.get(i) else {
+            return;
+        };
+        let (verts, world, _) = instance_vertices(scene, i, d.rect);
+        let first = d.first_vertex;
+        queue.write_buffer(
+            &self.vertices,
+            first as u64 * std::mem::size_of::<Vertex>() as u64,
+            bytemuck::cast_slice(&verts),
+        );
+        let d = &mut self.draws[i];
+        d.bounds = world_bounds(&world);
+        let to = scene.instances[i].transform;
+        if let Some(v) = &mut d.volume {
+            v.transform(to * d.transform.inverse());
+        }
+        d.transform = to;
+        self.bounds = self.draws.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), d| (lo.min(d.bounds.0), hi.max(d.bounds.1)),
+        );
     }
 }
 

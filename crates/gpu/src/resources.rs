@@ -167,7 +167,29 @@ pub fn read_texture_in_bands(
     bpp: u32,
     max_bytes: u64,
 ) -> Result<Vec<u8>, ReadbackError> {
-    let (w, h, layers) = (tex.width(), tex.height(), tex.depth_or_array_layers());
+    read_mip_in_bands(ctx, tex, 0, bpp, max_bytes)
+}
+
+/// Mip level `mip` of every layer, as [`read_texture`] reads level 0.
+pub fn read_texture_mip(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    mip: u32,
+    bpp: u32,
+) -> Result<Vec<u8>, ReadbackError> {
+    let limit = ctx.device.limits().max_buffer_size.min(READBACK_BAND_BYTES);
+    read_mip_in_bands(ctx, tex, mip, bpp, limit)
+}
+
+fn read_mip_in_bands(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    mip: u32,
+    bpp: u32,
+    max_bytes: u64,
+) -> Result<Vec<u8>, ReadbackError> {
+    let layers = tex.depth_or_array_layers();
+    let (w, h) = ((tex.width() >> mip).max(1), (tex.height() >> mip).max(1));
     let row = ((w * bpp).div_ceil(256) * 256) as u64;
     let band = (max_bytes / row).clamp(1, h as u64) as u32;
     let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -185,7 +207,7 @@ pub fn read_texture_in_bands(
             enc.copy_texture_to_buffer(
                 wgpu::TexelCopyTextureInfo {
                     texture: tex,
-                    mip_level: 0,
+                    mip_level: mip,
                     origin: wgpu::Origin3d {
                         x: 0,
                         y: y0,

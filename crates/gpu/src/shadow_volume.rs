@@ -45,6 +45,24 @@ pub struct VolumeMesh {
 }
 
 impl VolumeMesh {
+    /// Move the mesh rigidly by `m` (a rotation, translation and positive scale: the edges
+    /// keep their orientation).
+    pub fn transform(&mut self, m: glam::Mat4) {
+        let nm = glam::Mat3::from_mat4(m).inverse().transpose();
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+        for n in &mut self.normals {
+            *n = (nm * *n).normalize_or_zero();
+        }
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for p in &self.positions {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        self.bounds = (lo, hi);
+    }
+
     /// Weld positions closer than 10⁻⁵ of the mesh size (parametric seams and poles are equal
     /// only up to rounding), drop zero-area triangles and build the edge list.
     pub fn new(positions: &[Vec3], indices: &[u32]) -> VolumeMesh {

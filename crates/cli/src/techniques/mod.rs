@@ -111,6 +111,8 @@ impl TechniqueRenderer {
     /// times.
     pub fn image(&mut self, ctx: &GpuContext) -> Result<(Image, FrameTimes)> {
         let r = &mut self.renderer;
+        // A still image: the dynamic maps made with the renderer see this very scene.
+        r.set_dynamic_env_every(0);
         r.render(ctx);
         let times = r.render(ctx);
         // A debug view's layer replaces the frame, which is then not read back.

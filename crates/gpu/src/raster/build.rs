@@ -258,7 +258,7 @@ fn groups(
 }
 
 /// Timestamp queries for every pass of a frame: the set, its resolve and read buffers.
-fn queries(
+pub(super) fn queries(
     ctx: &GpuContext,
     passes: usize,
 ) -> Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)> {
@@ -450,6 +450,9 @@ impl Renderer {
             queries,
             frame,
             ambient: source,
+            env,
+            hidden: None,
+            moved: false,
         })
     }
 }

@@ -70,9 +70,6 @@ pub struct EnvInstance {
     pub dynamic: [u32; 4],
 }
 
-/// At most this many objects get dynamic maps (each costs six renders and a CPU prefilter).
-pub const MAX_DYNAMIC_OBJECTS: usize = 4;
-
 /// Group 2's entries of the term.
 pub(super) fn layout_entries() -> Vec<LayoutEntry> {
     vec![
@@ -87,6 +84,8 @@ pub(super) fn layout_entries() -> Vec<LayoutEntry> {
 /// The term's GPU resources.
 pub(super) struct EnvResources {
     maps: wgpu::TextureView,
+    /// The dynamic maps' updater (`--dynamic-env`).
+    pub dynamic: Option<super::env_dynamic::DynamicEnv>,
     sampler: wgpu::Sampler,
     lut: wgpu::TextureView,
     uniforms: wgpu::Buffer,
@@ -243,20 +242,21 @@ impl EnvResources {
                 dynamic: [0; 4],
             })
             .collect();
-        if let (Some(m), true) = (maps.as_mut(), s.dynamic_env) {
-            for i in dynamic_instances(scene) {
-                match dynamic(ctx, scene, s, i, m) {
-                    Ok(d) => {
-                        let colour = m.layers.len() as u32;
-                        m.layers.extend(d.layers);
-                        instances[i].dynamic = [colour, m.layers.len() as u32, 1, 0];
-                        m.layers.extend(d.distance);
-                        u.dynamic_objects += 1;
-                    }
-                    Err(e) => eprintln!("warning: no dynamic environment map: {e}"),
-                }
+        // Dynamic maps: their layers follow the static ones, written on the GPU.
+        let objects: Vec<(usize, u32)> = match (&maps, s.dynamic_env) {
+            (Some(m), true) => {
+                let per = super::env_dynamic::layers_per_object(m);
+                super::env_dynamic::dynamic_instances(scene)
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, i)| (i, m.layers.len() as u32 + k as u32 * per))
+                    .collect()
             }
-        }
+            _ => vec![],
+        };
+        let extra = maps.as_ref().map_or(0, |m| {
+            objects.len() as u32 * super::env_dynamic::layers_per_object(m)
+        });
         if let Some(m) = &maps {
             for (i, r) in m.roughness.iter().enumerate() {
                 u.roughness[i / 4][i % 4] = *r;
@@ -304,7 +304,37 @@ impl EnvResources {
             (None, 4) => Some("constant environment".into()),
             _ => None,
         };
-        let maps = upload_maps(ctx, maps.as_ref());
+        let (tex, view) = upload_maps(ctx, maps.as_ref(), extra);
+        let dynamic = match (&maps, objects.is_empty()) {
+            (Some(m), false) => {
+                let settings = EnvSettings {
+                    param: m.param,
+                    frame: m.frame,
+                    size: m.size,
+                    roughness: m.roughness.clone(),
+                    lobes: m.lobes.clone(),
+                    samples: 128,
+                    irradiance: false,
+                };
+                match super::env_dynamic::DynamicEnv::new(ctx, scene, s, &settings, &tex, &objects)
+                {
+                    Ok(d) => {
+                        let per = super::env_dynamic::layers_per_object(m);
+                        let colour = per - m.faces() as u32;
+                        for &(i, base) in &objects {
+                            instances[i].dynamic = [base, base + colour, 1, 0];
+                        }
+                        u.dynamic_objects = objects.len() as u32;
+                        Some(d)
+                    }
+                    Err(e) => {
+                        eprintln!("warning: no dynamic environment maps: {e}");
+                        None
+                    }
+                }
+            }
+            _ => None,
+        };
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("environment"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -320,15 +350,29 @@ impl EnvResources {
         let spheres = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("environment instances"),
             contents: bytemuck::cast_slice(&instances),
-            usage: wgpu::BufferUsages::STORAGE,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         });
         EnvResources {
-            maps,
+            maps: view,
+            dynamic,
             spheres,
             sampler,
             lut: upload_lut(ctx),
             uniforms,
             summary,
+        }
+    }
+
+    /// Instance `i` of `scene` has moved: its bounding sphere (glass's second interface, the
+    /// dynamic maps' centre) and the dynamic maps' renderer follow.
+    pub fn moved(&mut self, ctx: &GpuContext, scene: &Scene, i: usize) {
+        ctx.queue.write_buffer(
+            &self.spheres,
+            (i * std::mem::size_of::<EnvInstance>()) as u64,
+            bytemuck::bytes_of(&bounding_sphere(scene, i)),
+        );
+        if let Some(d) = &mut self.dynamic {
+            d.moved(ctx, scene, i);
         }
     }
 
@@ -362,163 +406,26 @@ fn bounding_sphere(scene: &Scene, i: usize) -> [f32; 4] {
     [c.x, c.y, c.z, r]
 }
 
-/// The instances whose surroundings matter most in their reflections, most first: the
-/// mirror-like ones (metallic or glass, roughness under 0.3), smoothest metals first; at most
-/// [`MAX_DYNAMIC_OBJECTS`].
-pub fn dynamic_instances(scene: &Scene) -> Vec<usize> {
-    let score = |i: usize| {
-        let m = &scene.materials[scene.meshes[scene.instances[i].mesh].material];
-        // Metal mirrors first: glass shows more of what is behind it than what is around it.
-        let mirror = m.metallic.max(0.9 * m.specular_transmission);
-        (mirror >= 0.5 && m.roughness < 0.3).then_some(m.roughness - mirror)
-    };
-    let mut found: Vec<(usize, f32)> = (0..scene.instances.len())
-        .filter_map(|i| score(i).map(|s| (i, s)))
-        .collect();
-    found.sort_by(|a, b| a.1.total_cmp(&b.1));
-    found
-        .into_iter()
-        .take(MAX_DYNAMIC_OBJECTS)
-        .map(|(i, _)| i)
-        .collect()
-}
-
-/// Face size of the dynamic cube renders.
-const DYNAMIC_FACE: u32 = 128;
-
-/// The dynamic maps of one object, centred on its bounding sphere's centre: colour layers (the
-/// static maps' layout) and inverse-distance layers (mirror level, in every channel).
-pub struct DynamicMaps {
-    pub layers: Vec<Vec<Vec<glam::Vec3>>>,
-    pub distance: Vec<Vec<Vec<glam::Vec3>>>,
-}
-
-/// Dynamic environment maps (issue 20): the scene around instance `i` rendered from its
-/// centre into the six faces of a cube (wgpu has no geometry shaders, so six passes of the
-/// whole renderer, one camera each, with shadow volumes, which hold for any camera), resampled
-/// into a lat-long image and prefiltered like the static maps (`maps`' layout); the layers to
-/// append. The faces' distances (from the deferred path's positions) go into a distance map,
-/// with which the shader corrects the parallax of a map projected from the centre (distance
-/// impostors, Szirmay-Kalos et al. 2005).
-pub fn dynamic(
+/// The maps as one mip-mapped RGBA16F array (a 1×1 pair of layers without maps), with `extra`
+/// layers after them that compute passes write (the dynamic maps'). Radiance is clamped to
+/// 65,000, under the format's largest value.
+fn upload_maps(
     ctx: &GpuContext,
-    scene: &Scene,
-    s: &RasterSettings,
-    i: usize,
-    maps: &EnvMaps,
-) -> Result<DynamicMaps, super::RasterError> {
-    use glam::Vec3;
-    let (lo, hi) = scene
-        .instance_bounds(i)
-        .ok_or_else(|| super::RasterError::Settings("the dynamic object is empty".into()))?;
-    let centre = (lo + hi) * 0.5;
-    // Seen from its centre, a closed single-sided object shows only back faces, which the
-    // rasteriser culls: it stays, invisible, and still casts its shadow on its neighbours. A
-    // double-sided one would hide everything, so it goes.
-    let mut sub = scene.clone();
-    if scene.materials[scene.meshes[scene.instances[i].mesh].material].double_sided {
-        sub.instances.remove(i);
-    }
-    let axes = [
-        (Vec3::X, Vec3::Y),
-        (-Vec3::X, Vec3::Y),
-        (Vec3::Y, Vec3::Z),
-        (-Vec3::Y, Vec3::Z),
-        (Vec3::Z, Vec3::Y),
-        (-Vec3::Z, Vec3::Y),
-    ];
-    let cameras: Vec<Camera> = axes
-        .iter()
-        .map(|&(f, up)| {
-            let mut c = Camera::look_at("cube face", centre, centre + f, up, 90f32.to_radians());
-            c.znear = 1e-3 * (hi - lo).length().max(1e-3);
-            c
-        })
-        .collect();
-    sub.cameras = cameras.clone();
-    let face_settings = RasterSettings {
-        width: DYNAMIC_FACE,
-        height: DYNAMIC_FACE,
-        camera: 0,
-        shadows: super::ShadowMethod::VolumesZFail,
-        path: super::RenderPath::Deferred,
-        dynamic_env: false,
-        ..s.clone()
-    };
-    let mut r = super::Renderer::new(ctx, &sub, face_settings)?;
-    let mut faces = vec![];
-    let mut depths = vec![];
-    for cam in &cameras {
-        r.set_camera(ctx, cam.clone());
-        r.render(ctx);
-        faces.push(r.read_hdr(ctx)?);
-        // Camera-relative positions, w = 0 where nothing was drawn (the sky: infinitely far).
-        // The map holds inverse distances: filtering across an edge between a near object and
-        // the sky then blends to a finite distance near the object's, where blended distances
-        // put the edge's texels halfway to infinity (a bright band of sky reflected at the
-        // floor's far edge, a stepped outline at the box's).
-        let g = r.read_gbuffer(ctx)?;
-        depths.push(
-            g[3].iter()
-                .map(|p| {
-                    if p[3] > 0.0 {
-                        1.0 / Vec3::new(p[0], p[1], p[2]).length().max(1e-4)
-                    } else {
-                        0.0
-                    }
-                })
-                .collect::<Vec<f32>>(),
-        );
-    }
-    // Lat-long resampling: each direction from the face whose axis it is closest to.
-    let (w, h) = (4 * DYNAMIC_FACE, 2 * DYNAMIC_FACE);
-    let mut latlong = lightlab_core::image::Image::new(w, h);
-    let mut distance = lightlab_core::image::Image::new(w, h);
-    let t = (45f32.to_radians()).tan();
-    for y in 0..h {
-        for x in 0..w {
-            let uv = glam::Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
-            let d = lightlab_scene::Environment::uv_to_dir(uv);
-            let k = (0..6)
-                .max_by(|&a, &b| d.dot(axes[a].0).total_cmp(&d.dot(axes[b].0)))
-                .unwrap_or(0);
-            let v = cameras[k].transform.inverse().transform_vector3(d);
-            let ndc = glam::Vec2::new(v.x, v.y) / (-v.z * t);
-            let px =
-                ((ndc.x + 1.0) * 0.5 * DYNAMIC_FACE as f32).clamp(0.0, DYNAMIC_FACE as f32 - 1.0);
-            let py =
-                ((1.0 - ndc.y) * 0.5 * DYNAMIC_FACE as f32).clamp(0.0, DYNAMIC_FACE as f32 - 1.0);
-            let at = (py as u32 * DYNAMIC_FACE + px as u32) as usize;
-            latlong.data[(y * w + x) as usize] = faces[k].data[at];
-            distance.data[(y * w + x) as usize] = Vec3::splat(depths[k][at]);
-        }
-    }
-    let settings = EnvSettings {
-        param: maps.param,
-        frame: maps.frame,
-        size: maps.size,
-        roughness: maps.roughness.clone(),
-        lobes: maps.lobes.clone(),
-        samples: 128,
-        irradiance: false,
-    };
-    let distances = EnvSettings {
-        roughness: vec![0.0],
-        lobes: vec![Lobe::Ggx],
-        ..settings.clone()
-    };
-    Ok(DynamicMaps {
-        layers: envmap::prefilter(&latlong, 1.0, &settings).layers,
-        distance: envmap::prefilter(&distance, 1.0, &distances).layers,
-    })
-}
-
-/// The maps as one mip-mapped RGBA16F array (a 1×1 pair of layers without maps). Radiance is
-/// clamped to 65,000, under the format's largest value.
-fn upload_maps(ctx: &GpuContext, maps: Option<&EnvMaps>) -> wgpu::TextureView {
+    maps: Option<&EnvMaps>,
+    extra: u32,
+) -> (wgpu::Texture, wgpu::TextureView) {
     let (size, layers, mips) = match maps {
-        Some(m) => (m.size, m.layers.len() as u32, m.layers[0].len() as u32),
+        Some(m) => (
+            m.size,
+            m.layers.len() as u32 + extra,
+            m.layers[0].len() as u32,
+        ),
         None => (1, 2, 1),
+    };
+    let storage = if extra > 0 {
+        wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC
+    } else {
+        wgpu::TextureUsages::empty()
     };
     // At least two layers: GL makes a one-layer texture a plain 2D texture.
     let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -532,7 +439,7 @@ fn upload_maps(ctx: &GpuContext, maps: Option<&EnvMaps>) -> wgpu::TextureView {
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format: wgpu::TextureFormat::Rgba16Float,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | storage,
         view_formats: &[],
     });
     if let Some(m) = maps {
@@ -558,10 +465,11 @@ fn upload_maps(ctx: &GpuContext, maps: Option<&EnvMaps>) -> wgpu::TextureView {
             }
         }
     }
-    tex.create_view(&wgpu::TextureViewDescriptor {
+    let view = tex.create_view(&wgpu::TextureViewDescriptor {
         dimension: Some(Dim::D2Array),
         ..Default::default()
-    })
+    });
+    (tex, view)
 }
 
 /// The split-sum table (A, B in red and green), computed once per process.
@@ -603,7 +511,7 @@ mod tests {
     #[test]
     fn the_mirror_like_objects_get_dynamic_maps() {
         let scene = lightlab_scene::builtin::builtin("spheres").unwrap();
-        let names: Vec<&str> = dynamic_instances(&scene)
+        let names: Vec<&str> = super::super::env_dynamic::dynamic_instances(&scene)
             .into_iter()
             .map(|i| {
                 scene.materials[scene.meshes[scene.instances[i].mesh].material]

@@ -24,6 +24,7 @@ mod ambient;
 mod bindings;
 mod build;
 pub mod env;
+pub mod env_dynamic;
 mod light_set;
 mod passes;
 mod pipelines;
@@ -108,6 +109,12 @@ pub struct Renderer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
     frame: FrameUniforms,
     ambient: ambient::AmbientSource,
+    env: env::EnvResources,
+    /// An instance the camera passes leave out (a dynamic map's own object, seen from its
+    /// centre); it still casts shadows.
+    hidden: Option<usize>,
+    /// Objects moved since the last frame (the sky occlusion is drawn again).
+    moved: bool,
 }
 
 impl Renderer {
@@ -212,6 +219,34 @@ impl Renderer {
         &self.targets.hdr_view
     }
 
+    /// The camera-relative positions of the last frame (deferred path; w = 0 where nothing
+    /// was drawn).
+    pub(crate) fn position_view(&self) -> &wgpu::TextureView {
+        &self.targets.gbuffer[3]
+    }
+
+    /// Move instance `i` to its transform in `scene` (the scene the renderer was made from,
+    /// with that instance's transform changed): its vertices, bounds and shadow volume, and
+    /// the environment term's bounding sphere and dynamic maps follow from the next frame.
+    /// Baked data (light-maps, SH transfer) and shadow cascades, fitted to the scene's bounds
+    /// when the renderer was made, do not.
+    pub fn move_instance(&mut self, ctx: &GpuContext, scene: &Scene, i: usize) {
+        if i >= self.scene.draws.len() || i >= scene.instances.len() {
+            return;
+        }
+        self.scene.move_instance(&ctx.queue, scene, i);
+        self.env.moved(ctx, scene, i);
+        self.moved = true;
+    }
+
+    /// Update the dynamic environment maps every `every` frames from now on (0: keep those
+    /// made with the renderer, as a still image needs).
+    pub fn set_dynamic_env_every(&mut self, every: u32) {
+        if let Some(d) = &mut self.env.dynamic {
+            d.set_every(every);
+        }
+    }
+
     /// The camera of the next frame.
     pub fn camera(&self) -> &Camera {
         &self.camera
@@ -257,6 +292,12 @@ impl Renderer {
     pub fn render(&mut self, ctx: &GpuContext) -> FrameTimes {
         let t0 = Instant::now();
         let mut times = FrameTimes::default();
+        if std::mem::take(&mut self.moved) {
+            self.ambient.geometry_moved(ctx, &self.scene);
+        }
+        if let Some(d) = &mut self.env.dynamic {
+            d.before_frame(ctx, &mut times);
+        }
         if matches!(
             self.settings.shadows,
             ShadowMethod::VolumesZFail | ShadowMethod::VolumesZPass

@@ -123,7 +123,7 @@ impl Renderer {
         pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         let mut current: Option<bool> = None;
         for (ii, d) in self.scene.draws.iter().enumerate() {
-            if li.is_some_and(|li| !self.reaches(li, &d.bounds)) {
+            if li.is_some_and(|li| !self.reaches(li, &d.bounds)) || self.hidden == Some(ii) {
                 continue;
             }
             let m = &self.scene.materials[d.material];

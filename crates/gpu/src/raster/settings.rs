@@ -200,8 +200,11 @@ pub struct RasterSettings {
     pub env_diffuse: EnvDiffuse,
     /// Dynamic environment maps: the scene rendered into a cube at the centre of each of its
     /// (up to four) mirror-like objects, which then reflect their neighbours
-    /// (`raster::env::dynamic`).
+    /// (`raster::env_dynamic`).
     pub dynamic_env: bool,
+    /// Update the dynamic maps every this many frames (1: every frame, as objects move; 0:
+    /// only when the renderer is made).
+    pub dynamic_env_every: u32,
     /// Shadow the environment's sun: its bright region becomes a shadow-casting directional
     /// light for the diffuse term and leaves the SH ambient (`lightlab_core::sh_env::extract_sun`;
     /// the Phong and LPV techniques, `ambient` = the environment).
@@ -243,6 +246,7 @@ impl Default for RasterSettings {
             env_prefilter: EnvPrefilter::Auto,
             env_diffuse: EnvDiffuse::Sh,
             dynamic_env: false,
+            dynamic_env_every: 1,
             env_sun: true,
             sky_occlusion: super::ambient::SKY_OCCLUSION_DIRECTIONS,
             refraction: Refraction::Two,

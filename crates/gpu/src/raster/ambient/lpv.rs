@@ -13,7 +13,7 @@ use wgpu::util::DeviceExt;
 pub(in crate::raster) struct LpvSource {
     pub volume: Lpv,
     pub indirect_only: bool,
-    sky: super::SkyOcclusion,
+    pub(super) sky: super::SkyOcclusion,
     uniforms: wgpu::Buffer,
     views: Vec<wgpu::TextureView>,
     sampler: wgpu::Sampler,

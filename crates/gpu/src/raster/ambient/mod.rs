@@ -109,6 +109,15 @@ pub(super) enum AmbientSource {
 }
 
 impl AmbientSource {
+    /// Objects have moved: the sky occlusion's depth maps are drawn again.
+    pub fn geometry_moved(&self, ctx: &GpuContext, gscene: &crate::gpu_scene::GpuScene) {
+        match self {
+            AmbientSource::Sky(sky) => sky.rerender(ctx, gscene),
+            AmbientSource::Lpv(l) => l.sky.rerender(ctx, gscene),
+            _ => {}
+        }
+    }
+
     pub fn lightmap(ctx: &GpuContext, lm: &LightmapInput, page_size: [u32; 2]) -> AmbientSource {
         AmbientSource::Lightmap(lightmap::LightmapSource::new(ctx, lm, page_size))
     }

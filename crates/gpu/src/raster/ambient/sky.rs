@@ -6,8 +6,8 @@
 //! ratio Σ V_k E_k / Σ E_k to the unshadowed term (SH or irradiance map), so that an open sky
 //! is unchanged.
 //!
-//! The maps are made once per renderer (static geometry: the viewer's moving objects keep the
-//! occlusion of their first pose) and cost K depth passes. Many shadow-mapped directions rather
+//! The maps are made with the renderer, and again in the frame after objects move
+//! (`Renderer::move_instance`); they cost K depth passes. Many shadow-mapped directions rather
 //! than screen-space occlusion: they see occluders off screen and behind the camera, and the
 //! same code serves any camera (dynamic environment maps' cube faces included). The sun taken
 //! out of the environment (`extract_sun`) is not in the cells: it is a light of its own.
@@ -42,6 +42,8 @@ pub struct SkyOcclusion {
     depth: wgpu::TextureView,
     sampler: wgpu::Sampler,
     data: wgpu::Buffer,
+    texture: wgpu::Texture,
+    dirs: Vec<SkyDir>,
 }
 
 /// `n` unit directions spread evenly over the sphere (spherical Fibonacci points).
@@ -165,7 +167,15 @@ impl SkyOcclusion {
                 contents: &bytes,
                 usage: wgpu::BufferUsages::STORAGE,
             }),
+            texture,
+            dirs: data,
         }
+    }
+
+    /// Render the depth maps again (objects have moved; the directions' frusta keep the
+    /// bounds the occlusion was made with).
+    pub fn rerender(&self, ctx: &GpuContext, gscene: &GpuScene) {
+        render_maps(ctx, gscene, &self.texture, &self.dirs);
     }
 
     /// Group 2's entries 8–10 (`sky_occlusion.wgsl`).
