@@ -36,6 +36,10 @@ pub struct ViewArgs {
     /// Close after this many frames (scripts, tests, timing).
     #[arg(long)]
     pub frames: Option<u64>,
+    /// Start with the mirror-like objects (those `--dynamic-env` maps) circling where they
+    /// stand (key M or the panel toggles it), so that their reflections change as they move.
+    #[arg(long)]
+    pub animate: bool,
     /// Screenshot file (key P; with --frames also written when the run ends).
     #[arg(long, default_value = "lightlab-view.png")]
     pub screenshot: PathBuf,
@@ -121,6 +125,7 @@ pub fn view(a: &ViewArgs) -> Result<()> {
             frames: a.frames,
             screenshot: a.screenshot.clone(),
             screenshot_at_end: a.frames.is_some(),
+            animate: a.animate,
         },
         make,
     )?;

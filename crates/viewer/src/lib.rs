@@ -12,10 +12,12 @@
 //!
 //! Controls: left drag orbits around the target, right or middle drag pans, the wheel dollies;
 //! W/A/S/D/Q/E move, Shift moves faster; 1–9 choose a technique, R resets the camera, H hides
-//! the panel, P writes a screenshot (`lightlab-view.png`), Esc quits.
+//! the panel, P writes a screenshot (`lightlab-view.png`), M sets the mirror-like objects
+//! moving or stops them ([`motion`]), Esc quits.
 
 pub mod camera;
 pub mod display;
+pub mod motion;
 
 use camera::OrbitCamera;
 use display::{Display, display_to_rgb8};
@@ -62,6 +64,8 @@ pub struct ViewerConfig {
     pub screenshot: PathBuf,
     /// Write the screenshot when a `frames` run ends.
     pub screenshot_at_end: bool,
+    /// Start with the mirror-like objects moving (`motion`); the panel toggles it.
+    pub animate: bool,
 }
 
 /// Errors of the viewer.
@@ -109,6 +113,7 @@ pub fn run(config: ViewerConfig, make: MakeRenderer<'_>) -> Result<ViewerStats, 
     let home = OrbitCamera::for_scene(cam, config.scene.bounds());
     let event_loop = EventLoop::new().map_err(|e| ViewerError::Window(e.to_string()))?;
     event_loop.set_control_flow(ControlFlow::Poll);
+    let (motion, animate) = (motion::Motion::new(&config.scene), config.animate);
     let mut app = App {
         technique: config
             .technique
@@ -133,6 +138,9 @@ pub fn run(config: ViewerConfig, make: MakeRenderer<'_>) -> Result<ViewerStats, 
         cursor: None,
         show_ui: true,
         want_screenshot: false,
+        motion,
+        animate,
+        clock: 0.0,
     };
     event_loop
         .run_app(&mut app)
@@ -190,6 +198,10 @@ struct App<'a> {
     cursor: Option<(f64, f64)>,
     show_ui: bool,
     want_screenshot: bool,
+    /// The moving objects, if the scene has any, whether they move, and their clock (s).
+    motion: Option<motion::Motion>,
+    animate: bool,
+    clock: f32,
 }
 
 impl App<'_> {
@@ -320,6 +332,14 @@ impl App<'_> {
         let Some(renderer) = gfx.renderer.as_mut() else {
             return;
         };
+        if self.animate {
+            self.clock += dt;
+        }
+        if let Some(m) = &mut self.motion
+            && (self.animate || self.clock > 0.0)
+        {
+            m.apply(&gfx.ctx, renderer, self.clock);
+        }
         renderer.set_camera(&gfx.ctx, self.orbit.camera());
         self.times = renderer.render(&gfx.ctx);
         let (rw, rh) = (renderer.settings.width, renderer.settings.height);
@@ -327,6 +347,7 @@ impl App<'_> {
         // The panel.
         let raw = gfx.egui.take_egui_input(&gfx.window);
         let (mut technique, mut exposure, mut tone) = (self.technique, self.exposure, self.tone);
+        let mut animate = self.animate;
         let mut reset = false;
         let mut shot = false;
         let info = format!("{} ({:?})", gfx.ctx.info.name, gfx.ctx.info.backend);
@@ -357,6 +378,9 @@ impl App<'_> {
                         ui.selectable_value(&mut tone, ToneMap::Reinhard, "Reinhard");
                         ui.selectable_value(&mut tone, ToneMap::Clamp, "clamp");
                     });
+                    if self.motion.is_some() {
+                        ui.checkbox(&mut animate, "move the mirror-like objects (M)");
+                    }
                     ui.horizontal(|ui| {
                         reset = ui.button("reset camera (R)").clicked();
                         shot = ui.button("screenshot (P)").clicked();
@@ -394,6 +418,7 @@ impl App<'_> {
         }
         self.exposure = exposure;
         self.tone = tone;
+        self.animate = animate;
         if reset {
             self.orbit = self.home.clone();
         }
@@ -595,6 +620,7 @@ impl ApplicationHandler for App<'_> {
                 match code {
                     KeyCode::Escape => event_loop.exit(),
                     KeyCode::KeyR => self.orbit = self.home.clone(),
+                    KeyCode::KeyM => self.animate = !self.animate,
                     KeyCode::KeyH => self.show_ui = !self.show_ui,
                     KeyCode::KeyP => self.want_screenshot = true,
                     _ => {
