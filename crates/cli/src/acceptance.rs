@@ -156,6 +156,7 @@ fn reference(scene: &Scene, kind: Reference) -> Image {
         min_depth,
         seed: 7,
         camera: 0,
+        lens: Default::default(),
     };
     PathTracer::new(scene, &accel)
         .render(&settings, &|_, _| true)

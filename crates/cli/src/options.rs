@@ -163,6 +163,86 @@ pub struct TechniqueArgs {
     pub sh: ShArgs,
     #[command(flatten)]
     pub lpv: LpvArgs,
+    #[command(flatten)]
+    pub lens: LensArgs,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum CameraModelArg {
+    /// Everything sharp.
+    Pinhole,
+    /// A thin lens (Gaussian lens law): what is off the plane of focus blurs.
+    ThinLens,
+}
+
+/// The camera's lens (Heidrich ch. 11), the same for the reference and every GPU technique.
+#[derive(Args, Clone, Debug)]
+pub struct LensArgs {
+    /// How the camera forms its image. The path tracer traces the thin lens; the GPU
+    /// techniques average `--lens-samples` off-axis projections over its aperture.
+    #[arg(long, default_value = "pinhole")]
+    pub camera_model: CameraModelArg,
+    /// The thin lens's aperture diameter, in scene units (metres).
+    #[arg(long, default_value_t = 0.05)]
+    pub aperture: f32,
+    /// Depth of the plane in focus along the view axis, in scene units; by default the depth
+    /// of the centre of the scene's bounds.
+    #[arg(long)]
+    pub focus_distance: Option<f32>,
+    /// Aperture samples the GPU techniques accumulate for a thin lens (one frame each).
+    #[arg(long, default_value_t = 64, value_name = "N")]
+    pub lens_samples: u32,
+}
+
+impl Default for LensArgs {
+    fn default() -> Self {
+        LensArgs {
+            camera_model: CameraModelArg::Pinhole,
+            aperture: 0.05,
+            focus_distance: None,
+            lens_samples: 64,
+        }
+    }
+}
+
+impl LensArgs {
+    /// The camera model for scene camera `camera` of `scene`.
+    pub fn model(
+        &self,
+        scene: &lightlab_scene::Scene,
+        camera: usize,
+    ) -> anyhow::Result<lightlab_core::lens::CameraModel> {
+        use lightlab_core::lens::{CameraModel, ThinLens};
+        if self.camera_model == CameraModelArg::Pinhole {
+            return Ok(CameraModel::Pinhole);
+        }
+        anyhow::ensure!(
+            (1..=4096).contains(&self.lens_samples),
+            "--lens-samples must be 1 to 4096, not {}",
+            self.lens_samples
+        );
+        let focus = match self.focus_distance {
+            Some(f) => f,
+            None => {
+                let cam = scene
+                    .cameras
+                    .get(camera)
+                    .ok_or_else(|| anyhow::anyhow!("the scene has no camera {camera}"))?;
+                let (lo, hi) = scene
+                    .bounds()
+                    .ok_or_else(|| anyhow::anyhow!("an empty scene has no depth to focus on"))?;
+                let forward = cam.transform.transform_vector3(-glam::Vec3::Z).normalize();
+                ((lo + hi) * 0.5 - cam.position()).dot(forward).max(1e-3)
+            }
+        };
+        let lens = ThinLens {
+            aperture: self.aperture,
+            focus_distance: focus,
+        };
+        lens.validate()
+            .map_err(|e| anyhow::anyhow!("--aperture / --focus-distance: {e}"))?;
+        Ok(CameraModel::ThinLens(lens))
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

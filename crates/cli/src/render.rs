@@ -144,6 +144,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         min_depth,
         seed: a.seed,
         camera: a.camera,
+        lens: a.gpu.lens.model(&scene, a.camera)?,
     };
     settings.validate()?;
     if let Some(shard) = &a.shard {

@@ -31,6 +31,7 @@ pub mod color;
 pub mod envmap;
 pub mod fuzz;
 pub mod image;
+pub mod lens;
 pub mod lpv;
 pub mod metrics;
 pub mod names;

@@ -102,6 +102,7 @@ fn translucency_maps_scale_light_through_the_back_of_a_leaf() {
         min_depth: 0,
         seed: 5,
         camera: 0,
+        lens: Default::default(),
     };
     let reference = PathTracer::new(&scene, &accel)
         .render(&settings, &|_, _| true)

@@ -381,6 +381,7 @@ fn direct_reference(scene: &Scene, spp: u32, seed: u64) -> Image {
                 min_depth: 0,
                 seed,
                 camera: 0,
+                lens: Default::default(),
             },
             &|_, _| true,
         )

@@ -18,6 +18,7 @@ use crate::bsdf::Bsdf;
 use crate::lights::{LightSet, emission, sample_punctual};
 use glam::{Mat3, Vec2, Vec3};
 use lightlab_core::image::Image;
+use lightlab_core::lens::CameraModel;
 use lightlab_core::sampling::{Frame, Rng, power_heuristic};
 use lightlab_scene::{Attrs, Camera, Scene};
 use rayon::prelude::*;
@@ -39,6 +40,9 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Index of the scene camera to use (0 = default camera).
     pub camera: usize,
+    /// How the camera forms its image (a pinhole, or a thin lens that blurs what is off its
+    /// plane of focus).
+    pub lens: lightlab_core::lens::CameraModel,
 }
 
 impl Default for RenderSettings {
@@ -51,6 +55,7 @@ impl Default for RenderSettings {
             min_depth: 0,
             seed: 0,
             camera: 0,
+            lens: Default::default(),
         }
     }
 }
@@ -94,6 +99,9 @@ impl RenderSettings {
                 "min depth {} exceeds max depth {}",
                 self.min_depth, self.max_depth
             ));
+        }
+        if let CameraModel::ThinLens(l) = self.lens {
+            l.validate().or_else(|e| bad(e.to_string()))?;
         }
         Ok(())
     }
@@ -528,6 +536,9 @@ impl<'a> PathTracer<'a> {
         let aspect = w as f32 / h as f32;
         let origin = cam.position();
         let forward = cam.transform.transform_vector3(-Vec3::Z).normalize();
+        let t = (cam.yfov * 0.5).tan();
+        // The pinhole's camera-space direction through an NDC point (the thin lens's chief ray).
+        let pinhole = |ndc: Vec2| Vec3::new(ndc.x * t * aspect, ndc.y * t, -1.0);
         let done = AtomicUsize::new(0);
         let cancelled = AtomicBool::new(false);
         let out: Vec<Vec<Vec3>> = rows
@@ -546,10 +557,19 @@ impl<'a> PathTracer<'a> {
                                 (x as f32 + j.x) / w as f32 * 2.0 - 1.0,
                                 1.0 - (y as f32 + j.y) / h as f32 * 2.0,
                             );
-                            let dir = cam.ray_direction(ndc, aspect);
+                            let (o, dir) = match s.lens {
+                                CameraModel::Pinhole => (origin, cam.ray_direction(ndc, aspect)),
+                                CameraModel::ThinLens(l) => {
+                                    let (o, d) = l.ray(pinhole(ndc), rng.next_vec2());
+                                    (
+                                        cam.transform.transform_point3(o),
+                                        cam.transform.transform_vector3(d).normalize(),
+                                    )
+                                }
+                            };
                             // Clipped at the near plane, as the rasteriser clips.
                             let near = cam.znear / dir.dot(forward).max(1e-6);
-                            let v = self.radiance(origin + dir * near, dir, s, &mut rng);
+                            let v = self.radiance(o + dir * near, dir, s, &mut rng);
                             if v.is_finite() {
                                 sum += v.as_dvec3();
                             }

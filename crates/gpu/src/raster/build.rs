@@ -453,6 +453,7 @@ impl Renderer {
             env,
             hidden: None,
             moved: false,
+            lens: None,
         })
     }
 }

@@ -115,6 +115,8 @@ pub struct Renderer {
     hidden: Option<usize>,
     /// Objects moved since the last frame (the sky occlusion is drawn again).
     moved: bool,
+    /// The thin lens and the aperture point the frame is seen from (None: the pinhole).
+    lens: Option<(lightlab_core::lens::ThinLens, glam::Vec2)>,
 }
 
 impl Renderer {
@@ -274,15 +276,32 @@ impl Renderer {
         Ok(())
     }
 
+    /// See the next frame from point `p` of a thin lens's aperture (camera space), through
+    /// the off-axis projection that keeps its plane of focus where the pinhole sees it
+    /// (`lightlab_core::lens::ThinLens::lens_view`); the average of such frames over the
+    /// aperture is the thin lens's image (Haeberli & Akeley). None: the pinhole.
+    pub fn set_lens_point(
+        &mut self,
+        ctx: &GpuContext,
+        lens: Option<(lightlab_core::lens::ThinLens, glam::Vec2)>,
+    ) {
+        self.lens = lens;
+        self.set_camera(ctx, self.camera.clone());
+    }
+
     /// Move the camera (the next frame uses it). Cascades follow only on a new renderer.
     pub fn set_camera(&mut self, ctx: &GpuContext, camera: Camera) {
         let aspect = self.settings.width as f32 / self.settings.height as f32;
-        let view = camera.transform.inverse();
+        let (lens_view, eye) = match self.lens {
+            Some((lens, p)) => (lens.lens_view(p), p.extend(0.0)),
+            None => (Mat4::IDENTITY, Vec3::ZERO),
+        };
+        let view = lens_view * camera.transform.inverse();
         let view_proj = projection(&camera, aspect) * view;
         self.frame.view_proj = view_proj.to_cols_array_2d();
         self.frame.inv_view_proj = view_proj.inverse().to_cols_array_2d();
         self.frame.view = view.to_cols_array_2d();
-        self.frame.camera_pos = camera.position().to_array();
+        self.frame.camera_pos = camera.transform.transform_point3(eye).to_array();
         self.camera = camera;
         ctx.queue
             .write_buffer(&self.frame_buf, 0, bytemuck::bytes_of(&self.frame));
