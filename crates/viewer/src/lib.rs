@@ -157,6 +157,26 @@ pub fn run(config: ViewerConfig, make: MakeRenderer<'_>) -> Result<ViewerStats, 
     Ok(app.stats)
 }
 
+/// The panel's frame and pass times, and the last error.
+fn timings(ui: &mut egui::Ui, frame_ms: f64, times: &FrameTimes, message: Option<&String>) {
+    ui.label(format!("frame {:.2} ms (wall, smoothed)", frame_ms));
+    if times.gpu_ms.is_empty() {
+        ui.label("no GPU timestamps on this adapter");
+    } else {
+        let total: f64 = times.gpu_ms.values().sum();
+        ui.label(format!("GPU {total:.3} ms"));
+        for (k, v) in &times.gpu_ms {
+            ui.label(format!("  {k}: {v:.3} ms"));
+        }
+    }
+    if times.cpu_volumes_ms > 0.0 {
+        ui.label(format!("CPU volumes {:.3} ms", times.cpu_volumes_ms));
+    }
+    if let Some(m) = message {
+        ui.colored_label(egui::Color32::LIGHT_RED, m);
+    }
+}
+
 struct Gfx {
     window: Arc<Window>,
     surface: wgpu::Surface<'static>,
@@ -335,11 +355,7 @@ impl App<'_> {
         if self.animate {
             self.clock += dt;
         }
-        if let Some(m) = &mut self.motion
-            && (self.animate || self.clock > 0.0)
-        {
-            m.apply(&gfx.ctx, renderer, self.clock);
-        }
+        motion::pose(&mut self.motion, self.clock, &gfx.ctx, renderer);
         renderer.set_camera(&gfx.ctx, self.orbit.camera());
         self.times = renderer.render(&gfx.ctx);
         let (rw, rh) = (renderer.settings.width, renderer.settings.height);
@@ -386,25 +402,10 @@ impl App<'_> {
                         shot = ui.button("screenshot (P)").clicked();
                     });
                     ui.separator();
-                    ui.label(format!("frame {:.2} ms (wall, smoothed)", self.frame_ms));
-                    if self.times.gpu_ms.is_empty() {
-                        ui.label("no GPU timestamps on this adapter");
-                    } else {
-                        let total: f64 = self.times.gpu_ms.values().sum();
-                        ui.label(format!("GPU {total:.3} ms"));
-                        for (k, v) in &self.times.gpu_ms {
-                            ui.label(format!("  {k}: {v:.3} ms"));
-                        }
-                    }
-                    if self.times.cpu_volumes_ms > 0.0 {
-                        ui.label(format!("CPU volumes {:.3} ms", self.times.cpu_volumes_ms));
-                    }
-                    if let Some(m) = &self.message {
-                        ui.colored_label(egui::Color32::LIGHT_RED, m);
-                    }
+                    timings(ui, self.frame_ms, &self.times, self.message.as_ref());
                     ui.separator();
                     ui.small("drag: orbit · right/middle drag: pan · wheel: dolly");
-                    ui.small("WASD QE: move (Shift: fast) · 1–9 technique · H panel · Esc quit");
+                    ui.small("WASD QE: move (Shift: fast) · 1–9 technique · H panel · M motion · Esc quit");
                 });
         });
         let mut full = full;

@@ -55,6 +55,15 @@ impl Motion {
     }
 }
 
+/// Pose `motion`'s movers at `clock` in `renderer` (nothing before they first moved).
+pub fn pose(motion: &mut Option<Motion>, clock: f32, ctx: &GpuContext, renderer: &mut Renderer) {
+    if let Some(m) = motion
+        && clock > 0.0
+    {
+        m.apply(ctx, renderer, clock);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

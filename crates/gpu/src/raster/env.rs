@@ -243,51 +243,11 @@ impl EnvResources {
             })
             .collect();
         // Dynamic maps: their layers follow the static ones, written on the GPU.
-        let objects: Vec<(usize, u32)> = match (&maps, s.dynamic_env) {
-            (Some(m), true) => {
-                let per = super::env_dynamic::layers_per_object(m);
-                super::env_dynamic::dynamic_instances(scene)
-                    .into_iter()
-                    .enumerate()
-                    .map(|(k, i)| (i, m.layers.len() as u32 + k as u32 * per))
-                    .collect()
-            }
-            _ => vec![],
-        };
+        let objects = dynamic_layers(scene, s, maps.as_ref());
         let extra = maps.as_ref().map_or(0, |m| {
             objects.len() as u32 * super::env_dynamic::layers_per_object(m)
         });
-        if let Some(m) = &maps {
-            for (i, r) in m.roughness.iter().enumerate() {
-                u.roughness[i / 4][i % 4] = *r;
-            }
-            let rows = m.frame.transpose();
-            [u.row0, u.row1, u.row2] =
-                [rows.x_axis, rows.y_axis, rows.z_axis].map(|r| r.extend(0.0).to_array());
-            u.mode = param_of(s.env_map).map_or(1, |p| p.1);
-            u.specular = u32::from(!m.lobes.is_empty());
-            u.levels = m.roughness.len() as u32;
-            u.phong_set = m.lobes.iter().position(|l| *l == Lobe::Phong).unwrap_or(0) as u32;
-            u.ggx_set = m.lobes.iter().position(|l| *l == Lobe::Ggx).unwrap_or(0) as u32;
-            u.faces = m.faces() as u32;
-            u.mips = m.layers[0].len() as f32;
-            u.texel_angle = m.texel_angle;
-        } else if let (true, Ambient::Constant(c), Some(_)) =
-            (enabled, s.ambient, param_of(s.env_map))
-        {
-            u.mode = 4;
-            u.specular = 1;
-            u.constant = c.extend(1.0).to_array();
-        }
-        u.refraction = match s.refraction {
-            super::Refraction::One => 1,
-            super::Refraction::Two => 2,
-        };
-        u.prefilter = match s.env_prefilter {
-            EnvPrefilter::Auto => 0,
-            EnvPrefilter::Phong => 1,
-            EnvPrefilter::Ggx => 2,
-        };
+        fill_uniforms(&mut u, maps.as_ref(), s, enabled);
         let device = &ctx.device;
         let summary = match (&maps, u.mode) {
             (Some(m), _) => Some(format!(
@@ -305,36 +265,17 @@ impl EnvResources {
             _ => None,
         };
         let (tex, view) = upload_maps(ctx, maps.as_ref(), extra);
-        let dynamic = match (&maps, objects.is_empty()) {
-            (Some(m), false) => {
-                let settings = EnvSettings {
-                    param: m.param,
-                    frame: m.frame,
-                    size: m.size,
-                    roughness: m.roughness.clone(),
-                    lobes: m.lobes.clone(),
-                    samples: 128,
-                    irradiance: false,
-                };
-                match super::env_dynamic::DynamicEnv::new(ctx, scene, s, &settings, &tex, &objects)
-                {
-                    Ok(d) => {
-                        let per = super::env_dynamic::layers_per_object(m);
-                        let colour = per - m.faces() as u32;
-                        for &(i, base) in &objects {
-                            instances[i].dynamic = [base, base + colour, 1, 0];
-                        }
-                        u.dynamic_objects = objects.len() as u32;
-                        Some(d)
-                    }
-                    Err(e) => {
-                        eprintln!("warning: no dynamic environment maps: {e}");
-                        None
-                    }
-                }
+        let dynamic = maps
+            .as_ref()
+            .filter(|_| !objects.is_empty())
+            .and_then(|m| dynamic_maps(ctx, scene, s, m, &tex, &objects));
+        if let (Some(_), Some(m)) = (&dynamic, &maps) {
+            let colour = super::env_dynamic::layers_per_object(m) - m.faces() as u32;
+            for &(i, base) in &objects {
+                instances[i].dynamic = [base, base + colour, 1, 0];
             }
-            _ => None,
-        };
+            u.dynamic_objects = objects.len() as u32;
+        }
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("environment"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -385,6 +326,78 @@ impl EnvResources {
             entry(24, self.spheres.as_entire_binding()),
         ]
     }
+}
+
+/// The instances with dynamic maps (`--dynamic-env`) and each one's first layer, after the
+/// static ones.
+fn dynamic_layers(scene: &Scene, s: &RasterSettings, maps: Option<&EnvMaps>) -> Vec<(usize, u32)> {
+    let Some(m) = maps.filter(|_| s.dynamic_env) else {
+        return vec![];
+    };
+    let per = super::env_dynamic::layers_per_object(m);
+    super::env_dynamic::dynamic_instances(scene)
+        .into_iter()
+        .enumerate()
+        .map(|(k, i)| (i, m.layers.len() as u32 + k as u32 * per))
+        .collect()
+}
+
+/// The dynamic maps' updater for `objects` (their first update made), or None with a warning
+/// when it cannot be made.
+fn dynamic_maps(
+    ctx: &GpuContext,
+    scene: &Scene,
+    s: &RasterSettings,
+    m: &EnvMaps,
+    tex: &wgpu::Texture,
+    objects: &[(usize, u32)],
+) -> Option<super::env_dynamic::DynamicEnv> {
+    let settings = EnvSettings {
+        param: m.param,
+        frame: m.frame,
+        size: m.size,
+        roughness: m.roughness.clone(),
+        lobes: m.lobes.clone(),
+        samples: 128,
+        irradiance: false,
+    };
+    super::env_dynamic::DynamicEnv::new(ctx, scene, s, &settings, tex, objects)
+        .inspect_err(|e| eprintln!("warning: no dynamic environment maps: {e}"))
+        .ok()
+}
+
+/// The term's uniforms from the maps (or the constant ambient) and `s`.
+fn fill_uniforms(u: &mut EnvUniforms, maps: Option<&EnvMaps>, s: &RasterSettings, enabled: bool) {
+    if let Some(m) = maps {
+        for (i, r) in m.roughness.iter().enumerate() {
+            u.roughness[i / 4][i % 4] = *r;
+        }
+        let rows = m.frame.transpose();
+        [u.row0, u.row1, u.row2] =
+            [rows.x_axis, rows.y_axis, rows.z_axis].map(|r| r.extend(0.0).to_array());
+        u.mode = param_of(s.env_map).map_or(1, |p| p.1);
+        u.specular = u32::from(!m.lobes.is_empty());
+        u.levels = m.roughness.len() as u32;
+        u.phong_set = m.lobes.iter().position(|l| *l == Lobe::Phong).unwrap_or(0) as u32;
+        u.ggx_set = m.lobes.iter().position(|l| *l == Lobe::Ggx).unwrap_or(0) as u32;
+        u.faces = m.faces() as u32;
+        u.mips = m.layers[0].len() as f32;
+        u.texel_angle = m.texel_angle;
+    } else if let (true, Ambient::Constant(c), Some(_)) = (enabled, s.ambient, param_of(s.env_map))
+    {
+        u.mode = 4;
+        u.specular = 1;
+        u.constant = c.extend(1.0).to_array();
+    }
+    u.refraction = match s.refraction {
+        super::Refraction::One => 1,
+        super::Refraction::Two => 2,
+    };
+    u.prefilter = match s.env_prefilter {
+        EnvPrefilter::Auto => 0,
+        EnvPrefilter::Phong => 1,
+        EnvPrefilter::Ggx => 2,
+    };
 }
 
 /// Instance `i`'s bounding sphere: the centre of its bounds and the farthest vertex from it
