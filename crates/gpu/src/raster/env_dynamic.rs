@@ -233,7 +233,7 @@ impl CubePrefilter {
         let levels = plan(maps, src_texel);
         let size = maps.size.max(1);
         let rows = maps.frame;
-        let mut params = Params {
+        let params = Params {
             r0: rows.row(0).extend(0.0).to_array(),
             r1: rows.row(1).extend(0.0).to_array(),
             r2: rows.row(2).extend(0.0).to_array(),
@@ -285,7 +285,6 @@ impl CubePrefilter {
                 (7, levels_buf.as_entire_binding()),
             ],
         );
-        params.src_size = size;
         CubePrefilter {
             weights: weights_buffer(device, maps.param, size),
             mip_sizes: envmap::mip_sizes(size),
