@@ -9,6 +9,9 @@
 //! the pinhole camera's field of view: a thin lens focused at s images the plane z = −s with
 //! the pinhole's framing, so that the lens only adds blur.
 
+pub mod prescription;
+pub mod system;
+
 use crate::sampling::{concentric_disc, r2};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
