@@ -78,6 +78,7 @@ pub struct LensSystem {
     pupil: Vec<(DVec2, DVec2)>,
     /// Irradiance at the film's centre for unit radiance (the exposure's normaliser).
     exposure0: f64,
+    pupil_radius: f64,
 }
 
 /// The paraxial matrix [[A, B], [C, D]] of a lens from its front vertex to its rear vertex,
@@ -181,8 +182,9 @@ impl LensSystem {
             focus_distance: setup.focus_distance,
             pupil: Vec::new(),
             exposure0: 0.0,
+            pupil_radius: 0.0,
         };
-        lens.pupil = lens.pupil_boxes();
+        (lens.pupil, lens.pupil_radius) = lens.pupil_boxes();
         lens.exposure0 = lens.centre_exposure();
         if lens.exposure0 <= 0.0 {
             return Err(LensSystemError::Blocked);
@@ -253,8 +255,9 @@ impl LensSystem {
     }
 
     /// Per ring of film radius, the box of the rear plane through which rays from film
-    /// points on +x at the ring's inner, middle and outer radius pass, grown by a grid cell.
-    fn pupil_boxes(&self) -> Vec<(DVec2, DVec2)> {
+    /// points on +x at the ring's inner, middle and outer radius pass, grown by a grid cell;
+    /// and the radius of the disc holding them all.
+    fn pupil_boxes(&self) -> (Vec<(DVec2, DVec2)>, f64) {
         let rear = self.elements.last().expect("a lens has surfaces");
         // The rear surface's rim may lie behind its vertex: cover the widest aperture.
         let a = 0.5
@@ -265,7 +268,8 @@ impl LensSystem {
                 .fold(rear.aperture, f64::max);
         let cell = 2.0 * a / PUPIL_GRID as f64;
         let r_max = self.film_half.length();
-        (0..PUPIL_RINGS)
+        let mut radius = 0.0f64;
+        let boxes = (0..PUPIL_RINGS)
             .map(|k| {
                 let mut lo = DVec2::splat(f64::INFINITY);
                 let mut hi = DVec2::splat(f64::NEG_INFINITY);
@@ -280,6 +284,7 @@ impl LensSystem {
                         if self.trace(film, d, true).is_some() {
                             lo = lo.min(q);
                             hi = hi.max(q);
+                            radius = radius.max(q.length() + cell);
                         }
                     }
                 }
@@ -289,7 +294,8 @@ impl LensSystem {
                     (lo - DVec2::splat(cell), hi + DVec2::splat(cell))
                 }
             })
-            .collect()
+            .collect();
+        (boxes, radius)
     }
 
     /// ∫ cos⁴θ / Z² dA over the rear plane for the film's centre, counting rays that pass.
@@ -361,17 +367,10 @@ impl LensSystem {
         sum / (n * n) as f64
     }
 
-    /// The rear-plane region through which some film point sees the scene: the union of the
-    /// rings' pupil boxes over every azimuth, as a square (lo, hi).
-    pub fn pupil_bounds(&self) -> (DVec2, DVec2) {
-        let r = self
-            .pupil
-            .iter()
-            .filter(|(lo, hi)| hi.x > lo.x)
-            .flat_map(|(lo, hi)| [*lo, *hi, DVec2::new(lo.x, hi.y), DVec2::new(hi.x, lo.y)])
-            .map(|c| c.length())
-            .fold(0.0, f64::max);
-        (DVec2::splat(-r), DVec2::splat(r))
+    /// The radius of the rear-plane disc through which some film point sees the scene: the
+    /// farthest passing point of the rings' traced grids, plus a grid cell.
+    pub fn pupil_radius(&self) -> f64 {
+        self.pupil_radius
     }
 
     /// The exposure normaliser (irradiance at the film's centre for unit radiance).

@@ -1,0 +1,516 @@
+//! Heidrich's image-based lens model (1999 §11.2; Heidrich, Slusallek & Seidel 1997): a
+//! traced lens approximated by perspective projections plus image morphs.
+//!
+//! Per sample point Pᵢ of the lens's rear plane (a rank-1 lattice over the disc through
+//! which the film sees the scene), a grid of film points sends rays through Pᵢ and out of the
+//! lens. They do not meet in one point; a virtual centre of projection (COP) is fitted to
+//! them (§11.2.3), either as the least-squares point closest to every ray [Gremban88] or by
+//! minimising the angles between each ray and its stand-in from the COP through the same
+//! point of the image plane (Gauss–Newton steps on a 3 × 3 system, started from the least
+//! squares point). Where the largest angle exceeds the threshold the film cell splits into
+//! four (the quad tree of §11.2.2). Each leaf is one perspective render from its COP through
+//! the window its rays span on the image plane (the plane of focus); the render is then
+//! morphed onto the leaf's film grid, each vertex reading the render where its traced ray
+//! meets the image plane, weighted by its share of the exposure (Kolb's cos⁴ / Z² times the
+//! sample point's area, zero where the lens blocks the ray, normalised as the traced
+//! camera's), and accumulated over cells and sample points.
+//!
+//! Deviation: the sample points lie on the plane through the rear vertex, not on the curved
+//! rear surface (the rays are traced from the film through them either way). Rays that miss
+//! the lens's surfaces (beyond its rim) carry no light and take the nearest valid vertex's
+//! texture coordinate.
+
+use super::system::LensSystem;
+use crate::sampling::{concentric_disc, r2};
+use glam::{DMat3, DVec2, DVec3, Mat4, Vec2, Vec3, Vec4};
+
+/// How a cell's centre of projection is found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum CopFit {
+    /// The point closest to every ray in the least-squares sense.
+    LeastSquares,
+    /// The point minimising the squared angles between the rays and their stand-ins.
+    #[default]
+    Angle,
+}
+
+/// Settings of the image-based model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImageModelSettings {
+    /// Sample points on the rear plane (Heidrich used 10).
+    pub samples: u32,
+    /// Largest angle (radians) between a traced ray and its stand-in before a cell splits
+    /// (Heidrich: 0.05°).
+    pub max_angle: f64,
+    pub fit: CopFit,
+    /// Film-grid vertices per side of a cell (its morph mesh).
+    pub grid: usize,
+    /// Deepest subdivision (a cell of the film's 1/2^depth on each side).
+    pub max_depth: u32,
+}
+
+impl Default for ImageModelSettings {
+    fn default() -> Self {
+        ImageModelSettings {
+            samples: 10,
+            max_angle: 0.05f64.to_radians(),
+            fit: CopFit::Angle,
+            grid: 33,
+            max_depth: 5,
+        }
+    }
+}
+
+/// A vertex of a cell's morph mesh.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MorphVertex {
+    /// Where the vertex lands in the output image (NDC, y up).
+    pub ndc: [f32; 2],
+    /// Where it reads the cell's render (texture coordinates, v down).
+    pub uv: [f32; 2],
+    /// Its exposure weight.
+    pub weight: f32,
+}
+
+/// One perspective render and its morph.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Projection {
+    /// The sample point on the rear plane (camera space).
+    pub point: DVec3,
+    /// The centre of projection (camera space).
+    pub cop: DVec3,
+    /// The window on the image plane, as tangents (x/−z, y/−z) seen from the COP.
+    pub window: (DVec2, DVec2),
+    /// The film cell (output NDC rectangle).
+    pub cell: (DVec2, DVec2),
+    /// `grid` × `grid` vertices, row by row from the cell's low corner.
+    pub vertices: Vec<MorphVertex>,
+    pub grid: usize,
+    /// Largest angle between a traced ray and its stand-in (radians).
+    pub max_angle: f64,
+}
+
+/// A lens's projections for one set of settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageModel {
+    pub projections: Vec<Projection>,
+    /// Sample points that some film point sees the scene through.
+    pub points_used: usize,
+}
+
+/// A traced film ray: where it leaves the lens, its direction, its exposure weight.
+struct FilmRay {
+    ray: Option<(DVec3, DVec3)>,
+    weight: f64,
+}
+
+impl Projection {
+    /// Camera space → the space whose standard projection (vertical field of view `yfov`,
+    /// `aspect`) shows this projection's window: translate to the COP, then scale and shear
+    /// x, y by z so the window's tangents fill the camera's. Compose as
+    /// `projection · view() · camera view`.
+    pub fn view(&self, yfov: f32, aspect: f32) -> Mat4 {
+        let t = (0.5 * yfov).tan();
+        let (lo, hi) = (self.window.0.as_vec2(), self.window.1.as_vec2());
+        let scale = Vec2::new(2.0 * t * aspect, 2.0 * t) / (hi - lo);
+        let shift = scale * (lo + hi) * 0.5;
+        let m = Mat4::from_cols(
+            Vec4::new(scale.x, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, scale.y, 0.0, 0.0),
+            Vec4::new(shift.x, shift.y, 1.0, 0.0),
+            Vec4::W,
+        );
+        m * Mat4::from_translation(-self.eye())
+    }
+
+    /// The COP as the eye (camera space).
+    pub fn eye(&self) -> Vec3 {
+        self.cop.as_vec3()
+    }
+
+    /// Triangle-list indices of the morph mesh.
+    pub fn indices(&self) -> Vec<u32> {
+        let g = self.grid as u32;
+        (0..g - 1)
+            .flat_map(|j| (0..g - 1).map(move |i| (i, j)))
+            .flat_map(|(i, j)| {
+                let a = j * g + i;
+                [a, a + 1, a + g + 1, a, a + g + 1, a + g]
+            })
+            .collect()
+    }
+}
+
+/// Build the image-based model of `lens`.
+pub fn build(lens: &LensSystem, s: &ImageModelSettings) -> ImageModel {
+    let radius = lens.pupil_radius();
+    let n = s.samples.max(1);
+    let area = std::f64::consts::PI * radius * radius / n as f64;
+    let mut projections = Vec::new();
+    let mut points_used = 0;
+    for i in 0..n {
+        let p = concentric_disc(r2(i, Vec2::ZERO)).as_dvec2() * radius;
+        let point = p.extend(lens.rear_z());
+        let before = projections.len();
+        let root = (DVec2::splat(-1.0), DVec2::ONE);
+        subdivide(lens, s, point, area, root, 0, &mut projections);
+        points_used += usize::from(projections.len() > before);
+    }
+    ImageModel {
+        projections,
+        points_used,
+    }
+}
+
+/// Fit the cell; keep it, split it, or drop it when no ray of it reaches the scene.
+fn subdivide(
+    lens: &LensSystem,
+    s: &ImageModelSettings,
+    point: DVec3,
+    area: f64,
+    cell: (DVec2, DVec2),
+    depth: u32,
+    out: &mut Vec<Projection>,
+) {
+    let g = s.grid.max(2);
+    let ndc: Vec<DVec2> = (0..g * g)
+        .map(|k| {
+            let f = DVec2::new((k % g) as f64, (k / g) as f64) / (g - 1) as f64;
+            cell.0 + (cell.1 - cell.0) * f
+        })
+        .collect();
+    let rays: Vec<FilmRay> = ndc
+        .iter()
+        .map(|&c| film_ray(lens, c, point, area))
+        .collect();
+    if rays.iter().all(|r| r.weight <= 0.0) {
+        return;
+    }
+    let plane = -lens.focus_distance;
+    let valid: Vec<(DVec3, DVec3)> = rays
+        .iter()
+        .filter_map(|r| r.ray)
+        .filter(|(_, d)| d.z < -1e-9)
+        .map(|(o, d)| (o + d * ((plane - o.z) / d.z), d))
+        .collect();
+    let Some((cop, max_angle)) = fit(&valid, s.fit) else {
+        return;
+    };
+    if max_angle > s.max_angle && depth < s.max_depth {
+        let mid = (cell.0 + cell.1) * 0.5;
+        for (a, b) in [
+            (cell.0, mid),
+            (DVec2::new(mid.x, cell.0.y), DVec2::new(cell.1.x, mid.y)),
+            (DVec2::new(cell.0.x, mid.y), DVec2::new(mid.x, cell.1.y)),
+            (mid, cell.1),
+        ] {
+            subdivide(lens, s, point, area, (a, b), depth + 1, out);
+        }
+        return;
+    }
+    let mut p = projection(lens, cop, max_angle, cell, g, &ndc, &rays);
+    p.point = point;
+    out.push(p);
+}
+
+/// The ray from film point `ndc` through rear-plane `point`, traced out of the lens without
+/// its apertures (for the map) and with them (for the weight).
+fn film_ray(lens: &LensSystem, ndc: DVec2, point: DVec3, area: f64) -> FilmRay {
+    let film = lens.film_point(ndc).extend(lens.film_z);
+    let d = (point - film).normalize();
+    let ray = lens.trace(film, d, false);
+    let z = lens.film_z - lens.rear_z();
+    let weight = match lens.trace(film, d, true) {
+        Some(_) => d.z.powi(4) / (z * z) * area / lens.exposure0(),
+        None => 0.0,
+    };
+    FilmRay { ray, weight }
+}
+
+/// The COP of rays given as (point on the image plane, unit direction), and the largest
+/// angle between a ray and the line from the COP through its image-plane point.
+pub fn fit(rays: &[(DVec3, DVec3)], how: CopFit) -> Option<(DVec3, f64)> {
+    if rays.len() < 3 {
+        return None;
+    }
+    let mut a = DMat3::ZERO;
+    let mut b = DVec3::ZERO;
+    for (q, d) in rays {
+        let m = DMat3::IDENTITY - outer(*d, *d);
+        a += m;
+        b += m * *q;
+    }
+    if a.determinant().abs() < 1e-24 {
+        return None;
+    }
+    let mut c = a.inverse() * b;
+    if how == CopFit::Angle {
+        c = angle_newton(rays, c);
+    }
+    let worst = rays
+        .iter()
+        .map(|(q, d)| (*q - c).normalize().dot(*d).clamp(-1.0, 1.0).acos())
+        .fold(0.0, f64::max);
+    worst.is_finite().then_some((c, worst))
+}
+
+/// Gauss–Newton on Σ |uₖ − dₖ|² (≈ Σ angle²), uₖ the unit vector from C to qₖ: each step
+/// solves the 3 × 3 normal equations.
+fn angle_newton(rays: &[(DVec3, DVec3)], mut c: DVec3) -> DVec3 {
+    for _ in 0..8 {
+        let mut h = DMat3::ZERO;
+        let mut g = DVec3::ZERO;
+        for (q, d) in rays {
+            let v = *q - c;
+            let len = v.length();
+            let u = v / len;
+            // ∂u/∂C = −(I − u uᵀ)/|q − C| (symmetric).
+            let j = (DMat3::IDENTITY - outer(u, u)) * (-1.0 / len);
+            h += j * j;
+            g += j * (u - *d);
+        }
+        if h.determinant().abs() < 1e-300 {
+            break;
+        }
+        let step = -(h.inverse() * g);
+        c += step;
+        if step.length() < 1e-14 {
+            break;
+        }
+    }
+    c
+}
+
+/// The least-squares affine map from film NDC to tangent over the vertices that have one.
+fn affine_fit(ndc: &[DVec2], tangent: &[Option<DVec2>]) -> impl Fn(DVec2) -> DVec2 {
+    let mut a = DMat3::ZERO;
+    let (mut bx, mut by) = (DVec3::ZERO, DVec3::ZERO);
+    for (c, t) in ndc.iter().zip(tangent) {
+        if let Some(t) = t {
+            let v = c.extend(1.0);
+            a += outer(v, v);
+            bx += v * t.x;
+            by += v * t.y;
+        }
+    }
+    let inv = if a.determinant().abs() > 1e-18 {
+        a.inverse()
+    } else {
+        DMat3::ZERO
+    };
+    let (px, py) = (inv * bx, inv * by);
+    move |c: DVec2| DVec2::new(px.dot(c.extend(1.0)), py.dot(c.extend(1.0)))
+}
+
+fn outer(a: DVec3, b: DVec3) -> DMat3 {
+    DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+/// A leaf: the window its rays span seen from the COP, and its morph mesh.
+fn projection(
+    lens: &LensSystem,
+    cop: DVec3,
+    max_angle: f64,
+    cell: (DVec2, DVec2),
+    g: usize,
+    ndc: &[DVec2],
+    rays: &[FilmRay],
+) -> Projection {
+    let plane = -lens.focus_distance;
+    let depth = cop.z - plane;
+    let tangent: Vec<Option<DVec2>> = rays
+        .iter()
+        .map(|r| {
+            let (o, d) = r.ray.filter(|(_, d)| d.z < -1e-9)?;
+            let q = o + d * ((plane - o.z) / d.z);
+            Some((q - cop).truncate() / depth)
+        })
+        .collect();
+    let mut lo = DVec2::splat(f64::INFINITY);
+    let mut hi = DVec2::splat(f64::NEG_INFINITY);
+    for t in tangent.iter().flatten() {
+        lo = lo.min(*t);
+        hi = hi.max(*t);
+    }
+    // A margin of a few texels' worth keeps bilinear reads inside the render.
+    let pad = (hi - lo).max(DVec2::splat(1e-9)) * (1.0 / 64.0);
+    let (lo, hi) = (lo - pad, hi + pad);
+    let uv = |t: DVec2| {
+        [
+            ((t.x - lo.x) / (hi.x - lo.x)) as f32,
+            ((hi.y - t.y) / (hi.y - lo.y)) as f32,
+        ]
+    };
+    let guess = affine_fit(ndc, &tangent);
+    let vertices = (0..g * g)
+        .map(|k| MorphVertex {
+            ndc: ndc[k].as_vec2().to_array(),
+            // A vertex whose ray misses the lens reads where the cell's affine fit says.
+            uv: uv(tangent[k].unwrap_or_else(|| guess(ndc[k]))),
+            weight: if tangent[k].is_some() {
+                rays[k].weight as f32
+            } else {
+                0.0
+            },
+        })
+        .collect();
+    Projection {
+        point: DVec3::ZERO,
+        cop,
+        window: (lo, hi),
+        cell,
+        vertices,
+        grid: g,
+        max_angle,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lens::prescription::Prescription;
+    use crate::lens::system::LensSetup;
+
+    fn lens(name: &str, stop: Option<f64>, yfov: f64) -> LensSystem {
+        let setup = LensSetup {
+            scale: 1.0,
+            stop_diameter: stop,
+            focus_distance: 3.0,
+            yfov,
+            aspect: 1.0,
+        };
+        LensSystem::new(&Prescription::builtin(name).unwrap(), setup).unwrap()
+    }
+
+    /// Every leaf meets the threshold (or is as deep as allowed), and a tighter threshold
+    /// needs more projections.
+    #[test]
+    fn the_quad_tree_meets_its_threshold() {
+        let l = lens("biconvex", Some(0.03), 1.2);
+        let mut last = 0;
+        for deg in [0.05, 0.01, 0.003] {
+            let s = ImageModelSettings {
+                max_angle: f64::to_radians(deg),
+                ..Default::default()
+            };
+            let m = build(&l, &s);
+            for p in &m.projections {
+                let deep = (p.cell.1.x - p.cell.0.x) <= 2.0 / (1 << s.max_depth) as f64 + 1e-12;
+                assert!(
+                    p.max_angle <= s.max_angle || deep,
+                    "{deg}: {}",
+                    p.max_angle.to_degrees()
+                );
+            }
+            assert!(m.projections.len() >= last, "{deg}");
+            last = m.projections.len();
+            println!("{deg}°: {} projections over {} points", last, m.points_used);
+        }
+        assert!(last > 2 * 10, "{last}");
+    }
+
+    fn squared_angles(rays: &[(DVec3, DVec3)], c: DVec3) -> f64 {
+        rays.iter()
+            .map(|(q, d)| (*q - c).normalize().dot(*d).clamp(-1.0, 1.0).acos().powi(2))
+            .sum()
+    }
+
+    /// The angle fit lowers its objective below the least-squares point's, and both find
+    /// the exact centre of rays that meet in one point.
+    #[test]
+    fn the_angle_fit_improves_on_least_squares() {
+        let c = DVec3::new(0.01, -0.02, 0.03);
+        let exact: Vec<(DVec3, DVec3)> = (0..25)
+            .map(|k| {
+                let q = DVec3::new((k % 5) as f64 - 2.0, (k / 5) as f64 - 2.0, -3.0);
+                (q, (q - c).normalize())
+            })
+            .collect();
+        for how in [CopFit::LeastSquares, CopFit::Angle] {
+            let (found, worst) = fit(&exact, how).unwrap();
+            assert!((found - c).length() < 1e-9 && worst < 1e-7, "{how:?}");
+        }
+        // Rays through one rear-plane point of a real lens do not meet.
+        for name in ["doublet", "biconvex", "double-gauss"] {
+            let l = lens(name, None, 1.0);
+            let point = DVec3::new(0.3 * l.pupil_radius(), 0.0, l.rear_z());
+            let plane = -l.focus_distance;
+            let rays: Vec<(DVec3, DVec3)> = (0..81)
+                .filter_map(|k| {
+                    let ndc = DVec2::new((k % 9) as f64 / 4.0 - 1.0, (k / 9) as f64 / 4.0 - 1.0);
+                    let film = l.film_point(ndc).extend(l.film_z);
+                    let (o, d) = l.trace(film, (point - film).normalize(), false)?;
+                    Some((o + d * ((plane - o.z) / d.z), d))
+                })
+                .collect();
+            let (ls, _) = fit(&rays, CopFit::LeastSquares).unwrap();
+            let (an, _) = fit(&rays, CopFit::Angle).unwrap();
+            let (a, b) = (squared_angles(&rays, ls), squared_angles(&rays, an));
+            println!("{name}: Σθ² least squares {a:.3e}, angle fit {b:.3e}");
+            assert!(b <= a * (1.0 + 1e-9) && b > 0.0, "{name}: {b} vs {a}");
+        }
+    }
+
+    /// The morph reproduces the traced lens between its vertices: a film point inside a
+    /// cell, read through the bilinear morph and the cell's COP, looks where the traced ray
+    /// through the same sample point looks, within half a pixel of a 512² image.
+    #[test]
+    fn the_morph_follows_the_traced_rays_between_vertices() {
+        for name in ["doublet", "biconvex"] {
+            let l = lens(name, None, 0.7);
+            let m = build(&l, &ImageModelSettings::default());
+            // A pixel of a 512² image, as an angle and on the plane of focus.
+            let pixel = 0.7 / 512.0;
+            let pixel_plane = 2.0 * 3.0 * 0.35f64.tan() / 512.0;
+            let (mut worst, mut worst_plane) = (0.0f64, 0.0f64);
+            for (i, p) in m.projections.iter().enumerate() {
+                for k in 0..16 {
+                    let f = r2(k + i as u32 * 16, Vec2::ZERO).as_dvec2();
+                    let (err, on_plane) = morph_error(&l, p, p.point, f);
+                    worst = worst.max(err);
+                    worst_plane = worst_plane.max(on_plane);
+                }
+            }
+            println!(
+                "{name}: on the plane of focus {:.3} px, direction {:.3} px",
+                worst_plane / pixel_plane,
+                worst / pixel
+            );
+            assert!(
+                worst_plane < 0.5 * pixel_plane,
+                "{name}: {} px",
+                worst_plane / pixel_plane
+            );
+            assert!(worst < 1.5 * pixel, "{name}: {} px", worst / pixel);
+        }
+    }
+
+    /// At fraction `f` of cell `p`: (angle between the traced ray's direction and the
+    /// morph's, the distance of the morph's image-plane point from the traced one).
+    fn morph_error(l: &LensSystem, p: &Projection, point: DVec3, f: DVec2) -> (f64, f64) {
+        let ndc = p.cell.0 + (p.cell.1 - p.cell.0) * f;
+        let film = l.film_point(ndc).extend(l.film_z);
+        // Only where the lens passes light (elsewhere the morph's weight is 0).
+        let Some((o, d)) = l.trace(film, (point - film).normalize(), true) else {
+            return (0.0, 0.0);
+        };
+        let g = p.grid;
+        let x = f * (g - 1) as f64;
+        let (i, j) = ((x.x as usize).min(g - 2), (x.y as usize).min(g - 2));
+        let (fx, fy) = (x.x - i as f64, x.y - j as f64);
+        let uv = |a: usize, b: usize| Vec2::from(p.vertices[b * g + a].uv).as_dvec2();
+        let uv = (uv(i, j) * (1.0 - fx) + uv(i + 1, j) * fx) * (1.0 - fy)
+            + (uv(i, j + 1) * (1.0 - fx) + uv(i + 1, j + 1) * fx) * fy;
+        let (lo, hi) = p.window;
+        let t = DVec2::new(lo.x + uv.x * (hi.x - lo.x), hi.y - uv.y * (hi.y - lo.y));
+        let depth = p.cop.z + l.focus_distance;
+        let q_morph = p.cop + (t * depth).extend(-depth);
+        let q_traced = o + d * ((-l.focus_distance - o.z) / d.z);
+        let seen = (q_morph - p.cop).normalize();
+        (
+            seen.dot(d).clamp(-1.0, 1.0).acos(),
+            (q_morph - q_traced).length(),
+        )
+    }
+}
