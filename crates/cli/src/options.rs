@@ -167,67 +167,119 @@ pub struct TechniqueArgs {
     pub lens: LensArgs,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+/// How the camera forms its image: `pinhole`, `thin-lens`, `thick-lens`, or `lens:FILE`
+/// (a lens prescription file, or a shipped lens: `lens:doublet`, `lens:biconvex`,
+/// `lens:double-gauss`).
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum CameraModelArg {
-    /// Everything sharp.
     Pinhole,
-    /// A thin lens (Gaussian lens law): what is off the plane of focus blurs.
     ThinLens,
+    ThickLens,
+    Lens(String),
+}
+
+fn parse_camera_model(s: &str) -> Result<CameraModelArg, String> {
+    match s {
+        "pinhole" => Ok(CameraModelArg::Pinhole),
+        "thin-lens" => Ok(CameraModelArg::ThinLens),
+        "thick-lens" => Ok(CameraModelArg::ThickLens),
+        _ => match s.strip_prefix("lens:") {
+            Some(f) if !f.is_empty() => Ok(CameraModelArg::Lens(f.to_string())),
+            _ => Err(format!(
+                "'{s}' is not a camera model: pinhole, thin-lens, thick-lens or lens:FILE \
+                 (lens:doublet, lens:biconvex, lens:double-gauss are shipped)"
+            )),
+        },
+    }
+}
+
+/// How the image-based lens model fits a centre of projection.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum CopFitArg {
+    /// Minimise the angles between traced rays and their stand-ins (Gauss–Newton).
+    Angle,
+    /// The point closest to every ray (least squares).
+    LeastSquares,
 }
 
 /// The camera's lens (Heidrich ch. 11), the same for the reference and every GPU technique.
 #[derive(Args, Clone, Debug)]
 pub struct LensArgs {
-    /// How the camera forms its image. The path tracer traces the thin lens; the GPU
-    /// techniques average `--lens-samples` off-axis projections over its aperture.
-    #[arg(long, default_value = "pinhole")]
+    /// How the camera forms its image: pinhole, thin-lens, thick-lens, or lens:FILE (a lens
+    /// prescription; lens:doublet, lens:biconvex and lens:double-gauss are shipped). The path
+    /// tracer traces the lens; the GPU techniques average off-axis projections over the
+    /// aperture (thin, thick) or use the image-based model (traced lenses).
+    #[arg(long, default_value = "pinhole", value_parser = parse_camera_model)]
     pub camera_model: CameraModelArg,
-    /// The thin lens's aperture diameter, in scene units (metres).
-    #[arg(long, default_value_t = 0.05)]
-    pub aperture: f32,
+    /// The aperture's diameter in scene units (metres): the thin or thick lens's (default
+    /// 0.05), or a traced lens's stop (default: the prescription's, times --lens-scale).
+    #[arg(long)]
+    pub aperture: Option<f32>,
     /// Depth of the plane in focus along the view axis, in scene units; by default the depth
     /// of the centre of the scene's bounds.
     #[arg(long)]
     pub focus_distance: Option<f32>,
-    /// Aperture samples the GPU techniques accumulate for a thin lens (one frame each).
-    #[arg(long, default_value_t = 64, value_name = "N")]
-    pub lens_samples: u32,
+    /// A thick lens's separation of its principal planes, in scene units: the scene sees the
+    /// lens this far in front of the camera.
+    #[arg(long, default_value_t = 0.05)]
+    pub thickness: f32,
+    /// Aperture samples the GPU techniques accumulate: frames for a thin or thick lens
+    /// (default 64), sample points of the image-based model for a traced lens (default 10).
+    #[arg(long, value_name = "N")]
+    pub lens_samples: Option<u32>,
+    /// Multiply every length of a lens prescription (1: as written, usually in mm).
+    #[arg(long, default_value_t = 1.0)]
+    pub lens_scale: f32,
+    /// The image-based model's largest angle, in degrees, between a traced ray and its
+    /// perspective stand-in before a film cell splits (Heidrich: 0.05).
+    #[arg(long, default_value_t = 0.05)]
+    pub lens_max_angle: f32,
+    /// How the image-based model fits each cell's centre of projection.
+    #[arg(long, default_value = "angle")]
+    pub cop_fit: CopFitArg,
 }
 
 impl Default for LensArgs {
     fn default() -> Self {
         LensArgs {
             camera_model: CameraModelArg::Pinhole,
-            aperture: 0.05,
+            aperture: None,
             focus_distance: None,
-            lens_samples: 64,
+            thickness: 0.05,
+            lens_samples: None,
+            lens_scale: 1.0,
+            lens_max_angle: 0.05,
+            cop_fit: CopFitArg::Angle,
         }
     }
 }
 
 impl LensArgs {
-    /// The camera model for scene camera `camera` of `scene`.
+    /// The camera model for scene camera `camera` of `scene`, for images of `aspect`
+    /// (width / height).
     pub fn model(
         &self,
         scene: &lightlab_scene::Scene,
         camera: usize,
+        aspect: f32,
     ) -> anyhow::Result<lightlab_core::lens::CameraModel> {
         use lightlab_core::lens::{CameraModel, ThinLens};
         if self.camera_model == CameraModelArg::Pinhole {
             return Ok(CameraModel::Pinhole);
         }
-        anyhow::ensure!(
-            (1..=4096).contains(&self.lens_samples),
-            "--lens-samples must be 1 to 4096, not {}",
-            self.lens_samples
-        );
+        if let Some(n) = self.lens_samples {
+            anyhow::ensure!(
+                (1..=4096).contains(&n),
+                "--lens-samples must be 1 to 4096, not {n}"
+            );
+        }
+        let cam = scene
+            .cameras
+            .get(camera)
+            .ok_or_else(|| anyhow::anyhow!("the scene has no camera {camera}"))?;
         let focus = match self.focus_distance {
             Some(f) => f,
             None => {
-                let cam = scene
-                    .cameras
-                    .get(camera)
-                    .ok_or_else(|| anyhow::anyhow!("the scene has no camera {camera}"))?;
                 let (lo, hi) = scene
                     .bounds()
                     .ok_or_else(|| anyhow::anyhow!("an empty scene has no depth to focus on"))?;
@@ -235,13 +287,79 @@ impl LensArgs {
                 ((lo + hi) * 0.5 - cam.position()).dot(forward).max(1e-3)
             }
         };
+        if let CameraModelArg::Lens(file) = &self.camera_model {
+            return self.traced(file, focus, cam.yfov, aspect);
+        }
         let lens = ThinLens {
-            aperture: self.aperture,
+            aperture: self.aperture.unwrap_or(0.05),
             focus_distance: focus,
+            thickness: match self.camera_model {
+                CameraModelArg::ThickLens => self.thickness,
+                _ => 0.0,
+            },
         };
         lens.validate()
-            .map_err(|e| anyhow::anyhow!("--aperture / --focus-distance: {e}"))?;
+            .map_err(|e| anyhow::anyhow!("--aperture / --focus-distance / --thickness: {e}"))?;
         Ok(CameraModel::ThinLens(lens))
+    }
+
+    /// A traced lens from a prescription file or a shipped lens's name.
+    fn traced(
+        &self,
+        file: &str,
+        focus: f32,
+        yfov: f32,
+        aspect: f32,
+    ) -> anyhow::Result<lightlab_core::lens::CameraModel> {
+        use lightlab_core::lens::prescription::{BUILTIN, Prescription};
+        use lightlab_core::lens::system::{LensSetup, LensSystem};
+        let path = std::path::Path::new(file);
+        let p = if !path.exists()
+            && let Some(p) = Prescription::builtin(file)
+        {
+            p
+        } else {
+            let text = std::fs::read_to_string(path).map_err(|e| {
+                let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
+                anyhow::anyhow!(
+                    "cannot read the lens prescription {file}: {e} (shipped lenses: {})",
+                    names.join(", ")
+                )
+            })?;
+            Prescription::parse(&text).map_err(|e| anyhow::anyhow!("{file}: {e}"))?
+        };
+        let setup = LensSetup {
+            scale: self.lens_scale as f64,
+            stop_diameter: self.aperture.map(f64::from),
+            focus_distance: focus as f64,
+            yfov: yfov as f64,
+            aspect: aspect as f64,
+        };
+        let lens = LensSystem::new(&p, setup).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        Ok(lightlab_core::lens::CameraModel::Traced(
+            std::sync::Arc::new(lens),
+        ))
+    }
+
+    /// The image-based model's settings.
+    pub fn image_model(
+        &self,
+    ) -> anyhow::Result<lightlab_core::lens::image_model::ImageModelSettings> {
+        use lightlab_core::lens::image_model::{CopFit, ImageModelSettings};
+        anyhow::ensure!(
+            self.lens_max_angle.is_finite() && self.lens_max_angle > 0.0,
+            "--lens-max-angle must be a positive number of degrees, not {}",
+            self.lens_max_angle
+        );
+        Ok(ImageModelSettings {
+            samples: self.lens_samples.unwrap_or(10),
+            max_angle: (self.lens_max_angle as f64).to_radians(),
+            fit: match self.cop_fit {
+                CopFitArg::Angle => CopFit::Angle,
+                CopFitArg::LeastSquares => CopFit::LeastSquares,
+            },
+            ..Default::default()
+        })
     }
 }
 

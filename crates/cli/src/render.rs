@@ -144,7 +144,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
         min_depth,
         seed: a.seed,
         camera: a.camera,
-        lens: a.gpu.lens.model(&scene, a.camera)?,
+        lens: a.gpu.lens.model(
+            &scene,
+            a.camera,
+            a.width as f32 / a.height.unwrap_or(a.width) as f32,
+        )?,
     };
     settings.validate()?;
     if let Some(shard) = &a.shard {

@@ -1,5 +1,6 @@
 //! Camera lenses (issue 25): the GPU's accumulated off-axis projections against the path
-//! tracer's thin lens, on `shadows` with direct light.
+//! tracer's thin and thick lens, and the image-based model against the traced lens systems,
+//! on `shadows` with direct light.
 
 mod common;
 use common::{lightlab, ok};
@@ -16,50 +17,63 @@ fn relmse(a: &Path, b: &Path) -> f64 {
     e / n
 }
 
+/// Render `shadows` at `size` with `args`, into `out`.
+fn run(size: &[&str], args: &[&str], out: &Path) {
+    let mut a = vec!["render", "--scene", "shadows"];
+    a.extend(size.iter().copied());
+    a.extend(args.iter().copied());
+    a.extend(["-o", out.to_str().unwrap()]);
+    ok(&lightlab(&a));
+}
+
+const GPU: [&str; 6] = [
+    "--technique",
+    "phong-shadow-volumes",
+    "--ambient",
+    "none",
+    "--ssaa",
+    "2",
+];
+
 #[test]
-fn the_gpu_thin_lens_matches_the_traced_one() {
+fn the_gpu_thin_and_thick_lenses_match_the_traced_ones() {
     let tmp = tempfile::tempdir().unwrap();
-    let p = |n: &str| tmp.path().join(n);
     let size = ["--width", "128", "--height", "96"];
-    // The front pillars lie far before the plane of focus (the scene's centre): a 0.5 m
-    // aperture blurs them over several pixels.
-    let lens = ["--camera-model", "thin-lens", "--aperture", "0.5"];
-    let run = |args: &[&str], out: &Path| {
-        let mut a = vec!["render", "--scene", "shadows"];
-        a.extend(size);
-        a.extend(args);
-        a.extend(["-o", out.to_str().unwrap()]);
-        ok(&lightlab(&a));
-    };
-    let (reference, thin, pinhole) = (p("ref.exr"), p("thin.exr"), p("pinhole.exr"));
-    run(
-        &[&["--technique", "direct", "--spp", "512"][..], &lens].concat(),
-        &reference,
-    );
-    let gpu = [
-        "--technique",
-        "phong-shadow-volumes",
-        "--ambient",
-        "none",
-        "--ssaa",
-        "2",
-    ];
-    run(
-        &[&gpu[..], &lens, &["--lens-samples", "64"]].concat(),
-        &thin,
-    );
-    run(&gpu, &pinhole);
-    let (e_thin, e_pinhole) = (relmse(&thin, &reference), relmse(&pinhole, &reference));
-    eprintln!(
-        "relMSE against the traced thin lens: GPU thin lens (64 samples) {e_thin:.2e}, GPU \
-         pinhole {e_pinhole:.2e}"
-    );
-    assert!(e_thin <= 0.01, "thin lens: relMSE {e_thin}");
-    assert!(
-        e_thin < e_pinhole / 3.0,
-        "the lens changes little: {e_thin} vs {e_pinhole}"
-    );
+    let pinhole = tmp.path().join("pinhole.exr");
+    run(&size, &GPU, &pinhole);
+    for model in ["thin-lens", "thick-lens"] {
+        let p = |n: &str| tmp.path().join(format!("{model}-{n}"));
+        // The front pillars lie far before the plane of focus (the scene's centre): a 0.5 m
+        // aperture blurs them over several pixels.
+        let lens = [
+            "--camera-model",
+            model,
+            "--aperture",
+            "0.5",
+            "--thickness",
+            "0.3",
+        ];
+        let (reference, gpu) = (p("ref.exr"), p("gpu.exr"));
+        let traced = ["--technique", "direct", "--spp", "512"];
+        run(&size, &[&traced[..], &lens].concat(), &reference);
+        run(
+            &size,
+            &[&GPU[..], &lens, &["--lens-samples", "64"]].concat(),
+            &gpu,
+        );
+        let (e_lens, e_pinhole) = (relmse(&gpu, &reference), relmse(&pinhole, &reference));
+        eprintln!(
+            "relMSE against the traced {model}: GPU (64 samples) {e_lens:.2e}, GPU pinhole \
+             {e_pinhole:.2e}"
+        );
+        assert!(e_lens <= 0.01, "{model}: relMSE {e_lens}");
+        assert!(
+            e_lens < e_pinhole / 3.0,
+            "{model}: the lens changes little: {e_lens} vs {e_pinhole}"
+        );
+    }
     // A lens that cannot form an image is refused before any work.
+    let bad = tmp.path().join("bad.exr");
     let o = lightlab(&[
         "render",
         "--scene",
@@ -71,8 +85,53 @@ fn the_gpu_thin_lens_matches_the_traced_one() {
         "--focus-distance",
         "-1",
         "-o",
-        p("bad.exr").to_str().unwrap(),
+        bad.to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(!p("bad.exr").exists());
+    assert!(!bad.exists());
+}
+
+/// The image-based lens model (Heidrich §11.2) against the path tracer's traced lens, for
+/// the shipped doublet and biconvex lens.
+#[test]
+fn the_image_based_model_matches_the_traced_lenses() {
+    let tmp = tempfile::tempdir().unwrap();
+    let size = ["--width", "96", "--height", "72"];
+    for lens in ["doublet", "biconvex"] {
+        let p = |n: &str| tmp.path().join(format!("{lens}-{n}"));
+        let model = format!("lens:{lens}");
+        let lens_args = ["--camera-model", model.as_str()];
+        let traced = ["--technique", "direct", "--spp", "256"];
+        run(&size, &[&traced[..], &lens_args].concat(), &p("ref.exr"));
+        for n in ["64", "10"] {
+            let args = [&GPU[..], &lens_args, &["--lens-samples", n]].concat();
+            run(&size, &args, &p(&format!("{n}.exr")));
+        }
+        let e64 = relmse(&p("64.exr"), &p("ref.exr"));
+        let e10 = relmse(&p("10.exr"), &p("ref.exr"));
+        eprintln!(
+            "{lens}: relMSE against the traced lens: 64 sample points {e64:.2e}, 10 {e10:.2e}"
+        );
+        assert!(e64 <= 0.01, "{lens}: {e64}");
+        assert!(
+            e64 < e10,
+            "{lens}: more sample points converge: {e64} vs {e10}"
+        );
+    }
+    // A prescription that is not there names the shipped lenses.
+    let bad = tmp.path().join("bad.exr");
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "shadows",
+        "--technique",
+        "direct",
+        "--camera-model",
+        "lens:no-such.lens",
+        "-o",
+        bad.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("doublet, biconvex, double-gauss"), "{err}");
 }

@@ -14,6 +14,7 @@
 
 pub mod gpu_scene;
 pub mod layout;
+pub mod lens_morph;
 pub mod lights;
 pub mod lpv;
 pub mod prt;

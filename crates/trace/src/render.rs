@@ -100,7 +100,7 @@ impl RenderSettings {
                 self.min_depth, self.max_depth
             ));
         }
-        if let CameraModel::ThinLens(l) = self.lens {
+        if let CameraModel::ThinLens(l) = &self.lens {
             l.validate().or_else(|e| bad(e.to_string()))?;
         }
         Ok(())
@@ -557,19 +557,32 @@ impl<'a> PathTracer<'a> {
                                 (x as f32 + j.x) / w as f32 * 2.0 - 1.0,
                                 1.0 - (y as f32 + j.y) / h as f32 * 2.0,
                             );
-                            let (o, dir) = match s.lens {
-                                CameraModel::Pinhole => (origin, cam.ray_direction(ndc, aspect)),
+                            let (o, dir, weight) = match &s.lens {
+                                CameraModel::Pinhole => {
+                                    (origin, cam.ray_direction(ndc, aspect), 1.0)
+                                }
                                 CameraModel::ThinLens(l) => {
                                     let (o, d) = l.ray(pinhole(ndc), rng.next_vec2());
-                                    (
-                                        cam.transform.transform_point3(o),
-                                        cam.transform.transform_vector3(d).normalize(),
-                                    )
+                                    (o, d, 1.0)
                                 }
+                                CameraModel::Traced(l) => {
+                                    let u = rng.next_vec2().as_dvec2();
+                                    let Some(r) = l.sample_ray(ndc.as_dvec2(), u) else {
+                                        continue;
+                                    };
+                                    (r.origin.as_vec3(), r.dir.as_vec3(), r.weight as f32)
+                                }
+                            };
+                            let (o, dir) = match &s.lens {
+                                CameraModel::Pinhole => (o, dir),
+                                _ => (
+                                    cam.transform.transform_point3(o),
+                                    cam.transform.transform_vector3(dir).normalize(),
+                                ),
                             };
                             // Clipped at the near plane, as the rasteriser clips.
                             let near = cam.znear / dir.dot(forward).max(1e-6);
-                            let v = self.radiance(o + dir * near, dir, s, &mut rng);
+                            let v = self.radiance(o + dir * near, dir, s, &mut rng) * weight;
                             if v.is_finite() {
                                 sum += v.as_dvec3();
                             }

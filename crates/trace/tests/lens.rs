@@ -25,6 +25,7 @@ fn an_out_of_focus_point_blurs_to_its_circle_of_confusion() {
     let lens = ThinLens {
         aperture: 0.4,
         focus_distance: 2.0,
+        thickness: 0.0,
     };
     let accel = Accel::new(&scene);
     let img = PathTracer::new(&scene, &accel)

@@ -4,6 +4,7 @@
 //! through [`build`]; each family's module (`phong`, `lightmap`, `sh`, `lpv`) reads its own
 //! options.
 
+mod lens;
 pub mod lightmap;
 mod lpv;
 mod normals;
@@ -57,32 +58,8 @@ pub struct TechniqueRenderer {
     sh_light: Option<(ShProjector, Scene)>,
     debug_view: DebugView,
     ssaa: u32,
-    /// A thin lens's aperture points: a still image averages one frame per point.
-    lens: Option<(lightlab_core::lens::ThinLens, Vec<glam::Vec2>)>,
-}
-
-/// The average of one frame per aperture point of `lens` (Haeberli & Akeley's accumulation).
-fn thin_lens_image(
-    ctx: &GpuContext,
-    r: &mut Renderer,
-    lens: &lightlab_core::lens::ThinLens,
-    points: &[glam::Vec2],
-) -> Result<Image> {
-    let mut sum: Option<Image> = None;
-    for p in points {
-        r.set_lens_point(ctx, Some((*lens, *p)));
-        r.render(ctx);
-        let img = r.read_hdr(ctx)?;
-        match &mut sum {
-            None => sum = Some(img),
-            Some(s) => s.data.iter_mut().zip(&img.data).for_each(|(a, b)| *a += *b),
-        }
-    }
-    r.set_lens_point(ctx, None);
-    let mut img = sum.expect("at least one aperture point");
-    let k = 1.0 / points.len() as f32;
-    img.data.iter_mut().for_each(|c| *c *= k);
-    Ok(img)
+    /// How a still image goes through the camera's lens (None: the pinhole).
+    lens: Option<lens::LensPlan>,
 }
 
 /// Build the renderer of a GPU technique.
@@ -116,12 +93,7 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
         sh_light,
         debug_view: req.args.lpv.debug_view,
         ssaa: req.args.raster.ssaa,
-        lens: match req.args.lens.model(req.scene, req.camera)? {
-            lightlab_core::lens::CameraModel::ThinLens(l) => {
-                Some((l, l.samples(req.args.lens.lens_samples)))
-            }
-            lightlab_core::lens::CameraModel::Pinhole => None,
-        },
+        lens: lens::LensPlan::new(req)?,
     })
 }
 
@@ -147,11 +119,8 @@ impl TechniqueRenderer {
         r.set_dynamic_env_every(0);
         r.render(ctx);
         let times = r.render(ctx);
-        if let Some((lens, points)) = &self.lens {
-            return Ok((
-                thin_lens_image(ctx, r, lens, points)?.downsample(self.ssaa),
-                times,
-            ));
+        if let Some(plan) = &mut self.lens {
+            return Ok((plan.image(ctx, r)?.downsample(self.ssaa), times));
         }
         // A debug view's layer replaces the frame, which is then not read back.
         if self.technique.family() == Family::Lpv

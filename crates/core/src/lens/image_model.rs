@@ -11,9 +11,11 @@
 //! four (the quad tree of §11.2.2). Each leaf is one perspective render from its COP through
 //! the window its rays span on the image plane (the plane of focus); the render is then
 //! morphed onto the leaf's film grid, each vertex reading the render where its traced ray
-//! meets the image plane, weighted by its share of the exposure (Kolb's cos⁴ / Z² times the
-//! sample point's area, zero where the lens blocks the ray, normalised as the traced
-//! camera's), and accumulated over cells and sample points.
+//! meets the image plane, weighted by its share of the exposure, and accumulated over cells
+//! and sample points. Exposure (the seed leaves it to [Heidrich97a]; Kolb et al.'s cos⁴ / Z²
+//! weighting, zero where the lens blocks the ray): each film point receives the traced
+//! camera's exposure, shared among the sample points in proportion to their weights, so that
+//! the few sample points only sample the blur.
 //!
 //! Deviation: the sample points lie on the plane through the rear vertex, not on the curved
 //! rear surface (the rays are traced from the film through them either way). Rays that miss
@@ -149,17 +151,54 @@ pub fn build(lens: &LensSystem, s: &ImageModelSettings) -> ImageModel {
     let area = std::f64::consts::PI * radius * radius / n as f64;
     let mut projections = Vec::new();
     let mut points_used = 0;
-    for i in 0..n {
-        let p = concentric_disc(r2(i, Vec2::ZERO)).as_dvec2() * radius;
-        let point = p.extend(lens.rear_z());
+    let points: Vec<DVec3> = (0..n)
+        .map(|i| (concentric_disc(r2(i, Vec2::ZERO)).as_dvec2() * radius).extend(lens.rear_z()))
+        .collect();
+    for &point in &points {
         let before = projections.len();
         let root = (DVec2::splat(-1.0), DVec2::ONE);
         subdivide(lens, s, point, area, root, 0, &mut projections);
         points_used += usize::from(projections.len() > before);
     }
+    normalise_exposure(lens, &points, &mut projections);
     ImageModel {
         projections,
         points_used,
+    }
+}
+
+/// Give each film point the traced lens's exposure, shared among the sample points in
+/// proportion to their cos⁴/Z² weights: with few sample points their share of the pupil's
+/// area is a poor estimate (10 points: ±20 % brightness), so only the blur is sampled. The
+/// film's relative exposure is tabulated on a 33² grid (a 16² pupil integral each) and read
+/// bilinearly.
+fn normalise_exposure(lens: &LensSystem, points: &[DVec3], projections: &mut [Projection]) {
+    const N: usize = 33;
+    let at = |i: usize, j: usize| DVec2::new(i as f64, j as f64) / (N - 1) as f64 * 2.0 - 1.0;
+    let table: Vec<f64> = (0..N * N)
+        .map(|k| lens.relative_exposure(at(k % N, k / N), 16))
+        .collect();
+    let exposure = |ndc: DVec2| {
+        let x = (ndc + 1.0) * 0.5 * (N - 1) as f64;
+        let (i, j) = ((x.x as usize).min(N - 2), (x.y as usize).min(N - 2));
+        let (fx, fy) = (x.x - i as f64, x.y - j as f64);
+        let t = |a: usize, b: usize| table[b * N + a];
+        (t(i, j) * (1.0 - fx) + t(i + 1, j) * fx) * (1.0 - fy)
+            + (t(i, j + 1) * (1.0 - fx) + t(i + 1, j + 1) * fx) * fy
+    };
+    for p in projections {
+        for v in &mut p.vertices {
+            if v.weight <= 0.0 {
+                continue;
+            }
+            let ndc = Vec2::from(v.ndc).as_dvec2();
+            let total: f64 = points
+                .iter()
+                .map(|q| film_ray(lens, ndc, *q, 1.0).weight)
+                .sum();
+            let own = film_ray(lens, ndc, p.point, 1.0).weight;
+            v.weight = (own / total * exposure(ndc)) as f32;
+        }
     }
 }
 

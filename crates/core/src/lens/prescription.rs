@@ -110,7 +110,7 @@ impl Prescription {
                     }
                     let nums = rest
                         .iter()
-                        .map(|w| number(w).map_err(|m| err(m)))
+                        .map(|w| number(w).map_err(&err))
                         .collect::<Result<Vec<f64>, _>>()?;
                     let e = if stop {
                         Element {

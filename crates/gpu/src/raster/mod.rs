@@ -116,7 +116,9 @@ pub struct Renderer {
     /// Objects moved since the last frame (the sky occlusion is drawn again).
     moved: bool,
     /// The thin lens and the aperture point the frame is seen from (None: the pinhole).
-    lens: Option<(lightlab_core::lens::ThinLens, glam::Vec2)>,
+    /// Camera space → the space the camera's projection applies to, and the eye in camera
+    /// space (a lens's view of the scene); None: the pinhole.
+    lens: Option<(Mat4, Vec3)>,
 }
 
 impl Renderer {
@@ -221,6 +223,11 @@ impl Renderer {
         &self.targets.hdr_view
     }
 
+    /// The frame's size in pixels (width, height), supersampling included.
+    pub fn size(&self) -> (u32, u32) {
+        (self.settings.width, self.settings.height)
+    }
+
     /// The camera-relative positions of the last frame (deferred path; w = 0 where nothing
     /// was drawn).
     pub(crate) fn position_view(&self) -> &wgpu::TextureView {
@@ -276,15 +283,13 @@ impl Renderer {
         Ok(())
     }
 
-    /// See the next frame from point `p` of a thin lens's aperture (camera space), through
-    /// the off-axis projection that keeps its plane of focus where the pinhole sees it
-    /// (`lightlab_core::lens::ThinLens::lens_view`); the average of such frames over the
-    /// aperture is the thin lens's image (Haeberli & Akeley). None: the pinhole.
-    pub fn set_lens_point(
-        &mut self,
-        ctx: &GpuContext,
-        lens: Option<(lightlab_core::lens::ThinLens, glam::Vec2)>,
-    ) {
+    /// See the next frame through a lens's view: `view` maps camera space to the space the
+    /// camera's projection applies to, `eye` is where shading sees the viewer (camera space).
+    /// A thin lens's aperture point gives the off-axis projection that keeps its plane of
+    /// focus where the pinhole sees it (`lightlab_core::lens::ThinLens::lens_view`; the
+    /// average of such frames is the thin lens's image, Haeberli & Akeley); a cell of the
+    /// image-based lens model gives its COP and window (`Projection::view`). None: the pinhole.
+    pub fn set_lens_view(&mut self, ctx: &GpuContext, lens: Option<(Mat4, Vec3)>) {
         self.lens = lens;
         self.set_camera(ctx, self.camera.clone());
     }
@@ -292,10 +297,7 @@ impl Renderer {
     /// Move the camera (the next frame uses it). Cascades follow only on a new renderer.
     pub fn set_camera(&mut self, ctx: &GpuContext, camera: Camera) {
         let aspect = self.settings.width as f32 / self.settings.height as f32;
-        let (lens_view, eye) = match self.lens {
-            Some((lens, p)) => (lens.lens_view(p), p.extend(0.0)),
-            None => (Mat4::IDENTITY, Vec3::ZERO),
-        };
+        let (lens_view, eye) = self.lens.unwrap_or((Mat4::IDENTITY, Vec3::ZERO));
         let view = lens_view * camera.transform.inverse();
         let view_proj = projection(&camera, aspect) * view;
         self.frame.view_proj = view_proj.to_cols_array_2d();
