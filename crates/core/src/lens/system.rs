@@ -256,46 +256,54 @@ impl LensSystem {
 
     /// Per ring of film radius, the box of the rear plane through which rays from film
     /// points on +x at the ring's inner, middle and outer radius pass, grown by a grid cell;
-    /// and the radius of the disc holding them all.
+    /// and the radius of the disc holding them all. A coarse grid over the widest aperture
+    /// finds the box, a second grid over it (grown by a coarse cell) refines it, so that a
+    /// small stop's pupil is found and bounded tightly.
     fn pupil_boxes(&self) -> (Vec<(DVec2, DVec2)>, f64) {
-        let rear = self.elements.last().expect("a lens has surfaces");
         // The rear surface's rim may lie behind its vertex: cover the widest aperture.
-        let a = 0.5
-            * self
-                .elements
-                .iter()
-                .map(|e| e.aperture)
-                .fold(rear.aperture, f64::max);
-        let cell = 2.0 * a / PUPIL_GRID as f64;
+        let a = 0.5 * self.elements.iter().map(|e| e.aperture).fold(0.0, f64::max);
         let r_max = self.film_half.length();
         let mut radius = 0.0f64;
         let boxes = (0..PUPIL_RINGS)
             .map(|k| {
-                let mut lo = DVec2::splat(f64::INFINITY);
-                let mut hi = DVec2::splat(f64::NEG_INFINITY);
-                for f in [0.0, 0.5, 1.0] {
-                    let r = (k as f64 + f) / PUPIL_RINGS as f64 * r_max;
-                    let film = DVec3::new(r, 0.0, self.film_z);
-                    for (i, j) in (0..PUPIL_GRID).flat_map(|i| (0..PUPIL_GRID).map(move |j| (i, j)))
-                    {
-                        let q =
-                            DVec2::new(-a + (i as f64 + 0.5) * cell, -a + (j as f64 + 0.5) * cell);
-                        let d = (q.extend(self.rear_z()) - film).normalize();
-                        if self.trace(film, d, true).is_some() {
-                            lo = lo.min(q);
-                            hi = hi.max(q);
-                            radius = radius.max(q.length() + cell);
-                        }
-                    }
-                }
-                if lo.x > hi.x {
-                    (DVec2::ZERO, DVec2::ZERO)
-                } else {
-                    (lo - DVec2::splat(cell), hi + DVec2::splat(cell))
-                }
+                let radii = [0.0, 0.5, 1.0].map(|f| (k as f64 + f) / PUPIL_RINGS as f64 * r_max);
+                let coarse = (DVec2::splat(-a), DVec2::splat(a));
+                let Some(found) = self.passing_box(&radii, coarse, 2 * PUPIL_GRID) else {
+                    return (DVec2::ZERO, DVec2::ZERO);
+                };
+                let fine = self.passing_box(&radii, found, PUPIL_GRID).unwrap_or(found);
+                radius = radius.max(fine.0.length().max(fine.1.length()));
+                radius = radius.max(DVec2::new(fine.0.x, fine.1.y).length());
+                radius = radius.max(DVec2::new(fine.1.x, fine.0.y).length());
+                fine
             })
             .collect();
         (boxes, radius)
+    }
+
+    /// The box of an `n`² grid's points over `region` of the rear plane through which rays
+    /// from film points at `radii` (on +x) pass, grown by a cell; None when none passes.
+    fn passing_box(
+        &self,
+        radii: &[f64],
+        region: (DVec2, DVec2),
+        n: usize,
+    ) -> Option<(DVec2, DVec2)> {
+        let cell = (region.1 - region.0) / n as f64;
+        let mut lo = DVec2::splat(f64::INFINITY);
+        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        for &r in radii {
+            let film = DVec3::new(r, 0.0, self.film_z);
+            for (i, j) in (0..n).flat_map(|i| (0..n).map(move |j| (i, j))) {
+                let q = region.0 + cell * DVec2::new(i as f64 + 0.5, j as f64 + 0.5);
+                let d = (q.extend(self.rear_z()) - film).normalize();
+                if self.trace(film, d, true).is_some() {
+                    lo = lo.min(q);
+                    hi = hi.max(q);
+                }
+            }
+        }
+        (lo.x <= hi.x).then(|| (lo - cell, hi + cell))
     }
 
     /// ∫ cos⁴θ / Z² dA over the rear plane for the film's centre, counting rays that pass.
@@ -365,6 +373,23 @@ impl LensSystem {
             }
         }
         sum / (n * n) as f64
+    }
+
+    /// The point of the plane of focus (camera space) imaged at the film point of `ndc`:
+    /// the exposure-weighted mean of where its rays, over an `n`² grid of its pupil box, meet
+    /// that plane (the distortion curve's object height). None when the lens blocks every
+    /// ray.
+    pub fn focus_point(&self, ndc: DVec2, n: usize) -> Option<DVec3> {
+        let (mut sum, mut total) = (DVec3::ZERO, 0.0);
+        for i in 0..n * n {
+            let u = DVec2::new((i % n) as f64 + 0.5, (i / n) as f64 + 0.5) / n as f64;
+            if let Some(r) = self.sample_ray(ndc, u) {
+                let t = (-self.focus_distance - r.origin.z) / r.dir.z;
+                sum += (r.origin + r.dir * t) * r.weight;
+                total += r.weight;
+            }
+        }
+        (total > 0.0).then(|| sum / total)
     }
 
     /// The radius of the rear-plane disc through which some film point sees the scene: the
