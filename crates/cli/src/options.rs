@@ -209,8 +209,10 @@ pub struct LensArgs {
     /// prescription; lens:doublet, lens:biconvex and lens:double-gauss are shipped). The path
     /// tracer traces the lens; the GPU techniques average off-axis projections over the
     /// aperture (thin, thick) or use the image-based model (traced lenses).
-    #[arg(long, default_value = "pinhole", value_parser = parse_camera_model)]
-    pub camera_model: CameraModelArg,
+    /// Default: the lens the scene's camera names (glTF `extras.lightlab.lens`), else the
+    /// pinhole.
+    #[arg(long, value_parser = parse_camera_model)]
+    pub camera_model: Option<CameraModelArg>,
     /// The aperture's diameter in scene units (metres): the thin or thick lens's (default
     /// 0.05), or a traced lens's stop (default: the prescription's, times --lens-scale).
     #[arg(long)]
@@ -220,16 +222,16 @@ pub struct LensArgs {
     #[arg(long)]
     pub focus_distance: Option<f32>,
     /// A thick lens's separation of its principal planes, in scene units: the scene sees the
-    /// lens this far in front of the camera.
-    #[arg(long, default_value_t = 0.05)]
-    pub thickness: f32,
+    /// lens this far in front of the camera (default 0.05).
+    #[arg(long)]
+    pub thickness: Option<f32>,
     /// Aperture samples the GPU techniques accumulate: frames for a thin or thick lens
     /// (default 64), sample points of the image-based model for a traced lens (default 10).
     #[arg(long, value_name = "N")]
     pub lens_samples: Option<u32>,
-    /// Multiply every length of a lens prescription (1: as written, usually in mm).
-    #[arg(long, default_value_t = 1.0)]
-    pub lens_scale: f32,
+    /// Multiply every length of a lens prescription (default 1: as written, usually in mm).
+    #[arg(long)]
+    pub lens_scale: Option<f32>,
     /// The image-based model's largest angle, in degrees, between a traced ray and its
     /// perspective stand-in before a film cell splits (Heidrich: 0.05).
     #[arg(long, default_value_t = 0.05)]
@@ -242,12 +244,12 @@ pub struct LensArgs {
 impl Default for LensArgs {
     fn default() -> Self {
         LensArgs {
-            camera_model: CameraModelArg::Pinhole,
+            camera_model: None,
             aperture: None,
             focus_distance: None,
-            thickness: 0.05,
+            thickness: None,
             lens_samples: None,
-            lens_scale: 1.0,
+            lens_scale: None,
             lens_max_angle: 0.05,
             cop_fit: CopFitArg::Angle,
         }
@@ -264,7 +266,19 @@ impl LensArgs {
         aspect: f32,
     ) -> anyhow::Result<lightlab_core::lens::CameraModel> {
         use lightlab_core::lens::{CameraModel, ThinLens};
-        if self.camera_model == CameraModelArg::Pinhole {
+        let cam = scene
+            .cameras
+            .get(camera)
+            .ok_or_else(|| anyhow::anyhow!("the scene has no camera {camera}"))?;
+        // The command line's choices, then the camera's own (glTF extras).
+        let named = cam.lens.clone().unwrap_or_default();
+        let kind = match &self.camera_model {
+            Some(m) => m.clone(),
+            None if cam.lens.is_some() => parse_camera_model(&named.model)
+                .map_err(|e| anyhow::anyhow!("camera '{}': {e}", cam.name))?,
+            None => CameraModelArg::Pinhole,
+        };
+        if kind == CameraModelArg::Pinhole {
             return Ok(CameraModel::Pinhole);
         }
         if let Some(n) = self.lens_samples {
@@ -273,11 +287,8 @@ impl LensArgs {
                 "--lens-samples must be 1 to 4096, not {n}"
             );
         }
-        let cam = scene
-            .cameras
-            .get(camera)
-            .ok_or_else(|| anyhow::anyhow!("the scene has no camera {camera}"))?;
-        let focus = match self.focus_distance {
+        let aperture = self.aperture.or(named.aperture);
+        let focus = match self.focus_distance.or(named.focus_distance) {
             Some(f) => f,
             None => {
                 let (lo, hi) = scene
@@ -287,58 +298,21 @@ impl LensArgs {
                 ((lo + hi) * 0.5 - cam.position()).dot(forward).max(1e-3)
             }
         };
-        if let CameraModelArg::Lens(file) = &self.camera_model {
-            return self.traced(file, focus, cam.yfov, aspect);
+        if let CameraModelArg::Lens(file) = &kind {
+            let scale = self.lens_scale.or(named.scale).unwrap_or(1.0);
+            return traced(file, aperture, scale, focus, cam.yfov, aspect);
         }
         let lens = ThinLens {
-            aperture: self.aperture.unwrap_or(0.05),
+            aperture: aperture.unwrap_or(0.05),
             focus_distance: focus,
-            thickness: match self.camera_model {
-                CameraModelArg::ThickLens => self.thickness,
+            thickness: match kind {
+                CameraModelArg::ThickLens => self.thickness.or(named.thickness).unwrap_or(0.05),
                 _ => 0.0,
             },
         };
         lens.validate()
             .map_err(|e| anyhow::anyhow!("--aperture / --focus-distance / --thickness: {e}"))?;
         Ok(CameraModel::ThinLens(lens))
-    }
-
-    /// A traced lens from a prescription file or a shipped lens's name.
-    fn traced(
-        &self,
-        file: &str,
-        focus: f32,
-        yfov: f32,
-        aspect: f32,
-    ) -> anyhow::Result<lightlab_core::lens::CameraModel> {
-        use lightlab_core::lens::prescription::{BUILTIN, Prescription};
-        use lightlab_core::lens::system::{LensSetup, LensSystem};
-        let path = std::path::Path::new(file);
-        let p = if !path.exists()
-            && let Some(p) = Prescription::builtin(file)
-        {
-            p
-        } else {
-            let text = std::fs::read_to_string(path).map_err(|e| {
-                let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
-                anyhow::anyhow!(
-                    "cannot read the lens prescription {file}: {e} (shipped lenses: {})",
-                    names.join(", ")
-                )
-            })?;
-            Prescription::parse(&text).map_err(|e| anyhow::anyhow!("{file}: {e}"))?
-        };
-        let setup = LensSetup {
-            scale: self.lens_scale as f64,
-            stop_diameter: self.aperture.map(f64::from),
-            focus_distance: focus as f64,
-            yfov: yfov as f64,
-            aspect: aspect as f64,
-        };
-        let lens = LensSystem::new(&p, setup).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
-        Ok(lightlab_core::lens::CameraModel::Traced(
-            std::sync::Arc::new(lens),
-        ))
     }
 
     /// The image-based model's settings.
@@ -361,6 +335,45 @@ impl LensArgs {
             ..Default::default()
         })
     }
+}
+
+/// A traced lens from a prescription file or a shipped lens's name.
+fn traced(
+    file: &str,
+    stop: Option<f32>,
+    scale: f32,
+    focus: f32,
+    yfov: f32,
+    aspect: f32,
+) -> anyhow::Result<lightlab_core::lens::CameraModel> {
+    use lightlab_core::lens::prescription::{BUILTIN, Prescription};
+    use lightlab_core::lens::system::{LensSetup, LensSystem};
+    let path = std::path::Path::new(file);
+    let p = if !path.exists()
+        && let Some(p) = Prescription::builtin(file)
+    {
+        p
+    } else {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
+            anyhow::anyhow!(
+                "cannot read the lens prescription {file}: {e} (shipped lenses: {})",
+                names.join(", ")
+            )
+        })?;
+        Prescription::parse(&text).map_err(|e| anyhow::anyhow!("{file}: {e}"))?
+    };
+    let setup = LensSetup {
+        scale: scale as f64,
+        stop_diameter: stop.map(f64::from),
+        focus_distance: focus as f64,
+        yfov: yfov as f64,
+        aspect: aspect as f64,
+    };
+    let lens = LensSystem::new(&p, setup).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+    Ok(lightlab_core::lens::CameraModel::Traced(
+        std::sync::Arc::new(lens),
+    ))
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

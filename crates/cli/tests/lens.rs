@@ -135,3 +135,40 @@ fn the_image_based_model_matches_the_traced_lenses() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("doublet, biconvex, double-gauss"), "{err}");
 }
+
+/// A glTF camera that names its lens in `extras.lightlab.lens` renders as the same lens
+/// named on the command line; the command line overrides the file.
+#[test]
+fn a_gltf_camera_names_its_lens() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |n: &str| tmp.path().join(n);
+    let gltf = p("shadows.gltf");
+    ok(&lightlab(&[
+        "export",
+        "--scene",
+        "shadows",
+        "-o",
+        gltf.to_str().unwrap(),
+    ]));
+    let text = std::fs::read_to_string(&gltf).unwrap();
+    let named = r#""extras": {"lightlab": {"lens": {"model": "lens:doublet", "aperture": 0.004}}}, "type": "perspective""#;
+    assert!(text.contains(r#""type": "perspective""#));
+    std::fs::write(&gltf, text.replacen(r#""type": "perspective""#, named, 1)).unwrap();
+    let size = ["--width", "48", "--height", "36"];
+    let traced = ["--technique", "direct", "--spp", "16"];
+    let render = |args: &[&str], out: &Path| {
+        let mut a = vec!["render", "--scene", gltf.to_str().unwrap()];
+        a.extend(size);
+        a.extend(traced);
+        a.extend(args.iter().copied());
+        a.extend(["-o", out.to_str().unwrap()]);
+        ok(&lightlab(&a));
+    };
+    render(&[], &p("file.exr"));
+    let flags = ["--camera-model", "lens:doublet", "--aperture", "0.004"];
+    render(&flags, &p("flags.exr"));
+    render(&["--camera-model", "pinhole"], &p("pinhole.exr"));
+    let read = |n: &str| Image::read(&p(n)).unwrap().data;
+    assert_eq!(read("file.exr"), read("flags.exr"));
+    assert_ne!(read("file.exr"), read("pinhole.exr"));
+}

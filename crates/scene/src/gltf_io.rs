@@ -13,7 +13,9 @@
 //! - the scene's `extras.lightlab.environment = { uri, intensity }`, an equirectangular EXR/HDR
 //!   next to the glTF file (glTF has no ratified equirectangular environment extension);
 //! - a decimated mesh's `extras.lightlab.detailSource` = the index of the glTF mesh it was
-//!   simplified from (loaded even when no node shows it), for detail baking.
+//!   simplified from (loaded even when no node shows it), for detail baking;
+//! - a camera's `extras.lightlab.lens = { model, aperture, focusDistance, thickness, scale }`
+//!   (`CameraLens`).
 //!
 //! Export writes one binary blob (GLB chunk, or `<stem>.bin` beside a `.gltf`) holding all
 //! geometry and the textures as PNG, plus `<stem>.env.exr` when the scene has an environment.
@@ -287,6 +289,45 @@ struct Importer<'a> {
     skipped: usize,
     /// Triangles of the instances so far.
     instanced_triangles: u64,
+}
+
+/// A camera's `extras.lightlab.lens` (see `CameraLens`); a prescription path is made
+/// relative to the glTF file's folder.
+fn camera_lens(cam: &gltf::Camera, path: &Path) -> Result<Option<CameraLens>, SceneError> {
+    let Some(v) = extras_json(cam.extras()).and_then(|e| e.get("lightlab")?.get("lens").cloned())
+    else {
+        return Ok(None);
+    };
+    let name = cam.name().unwrap_or("camera");
+    let bad = |m: String| gltf_err(path, format!("camera '{name}': extras.lightlab.lens {m}"));
+    let model = v
+        .get("model")
+        .and_then(Value::as_str)
+        .ok_or_else(|| bad("has no model (pinhole, thin-lens, thick-lens or lens:FILE)".into()))?;
+    let number = |key: &str| -> Result<Option<f32>, SceneError> {
+        match v.get(key) {
+            None => Ok(None),
+            Some(x) => x
+                .as_f64()
+                .filter(|f| f.is_finite())
+                .map(|f| Some(f as f32))
+                .ok_or_else(|| bad(format!("{key} is not a number"))),
+        }
+    };
+    let model = match model.strip_prefix("lens:") {
+        Some(file) if Path::new(file).extension().is_some() => {
+            let dir = path.parent().unwrap_or(Path::new("."));
+            format!("lens:{}", dir.join(file).display())
+        }
+        _ => model.to_string(),
+    };
+    Ok(Some(CameraLens {
+        model,
+        aperture: number("aperture")?,
+        focus_distance: number("focusDistance")?,
+        thickness: number("thickness")?,
+        scale: number("scale")?,
+    }))
 }
 
 fn extras_json(extras: &gltf::json::Extras) -> Option<Value> {
@@ -745,6 +786,7 @@ impl Importer<'_> {
                     yfov: p.yfov(),
                     znear: p.znear() * clip_scale,
                     zfar: p.zfar().map(|f| f * clip_scale),
+                    lens: camera_lens(&cam, self.path)?,
                 }),
                 gltf::camera::Projection::Orthographic(_) => {
                     // Orthographic cameras are not used by any lightlab technique; skipped.
@@ -1477,7 +1519,22 @@ impl Writer {
             if let Some(f) = c.zfar {
                 persp["zfar"] = json!(f);
             }
-            cameras.push(json!({ "name": c.name, "type": "perspective", "perspective": persp }));
+            let mut cam = json!({ "name": c.name, "type": "perspective", "perspective": persp });
+            if let Some(l) = &c.lens {
+                let mut lens = json!({ "model": l.model });
+                for (key, v) in [
+                    ("aperture", l.aperture),
+                    ("focusDistance", l.focus_distance),
+                    ("thickness", l.thickness),
+                    ("scale", l.scale),
+                ] {
+                    if let Some(v) = v {
+                        lens[key] = json!(v);
+                    }
+                }
+                cam["extras"] = json!({ "lightlab": { "lens": lens } });
+            }
+            cameras.push(cam);
             nodes.push(
                 json!({ "name": c.name, "camera": i, "matrix": c.transform.to_cols_array() }),
             );

@@ -772,6 +772,22 @@ pub struct Camera {
     pub yfov: f32,
     pub znear: f32,
     pub zfar: Option<f32>,
+    /// The lens the camera names (glTF `extras.lightlab.lens`); None: the pinhole unless the
+    /// command line says otherwise.
+    pub lens: Option<CameraLens>,
+}
+
+/// A camera's lens as a glTF file names it: `extras.lightlab.lens = { model, aperture,
+/// focusDistance, thickness, scale }`, with `model` one of `pinhole`, `thin-lens`,
+/// `thick-lens` or `lens:FILE` (a prescription, relative to the glTF file, or a shipped
+/// lens's name). Lengths in scene units; absent values take the command line's defaults.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct CameraLens {
+    pub model: String,
+    pub aperture: Option<f32>,
+    pub focus_distance: Option<f32>,
+    pub thickness: Option<f32>,
+    pub scale: Option<f32>,
 }
 
 impl Camera {
@@ -793,6 +809,7 @@ impl Camera {
             yfov,
             znear: 0.01,
             zfar: None,
+            lens: None,
         }
     }
 

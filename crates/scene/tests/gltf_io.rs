@@ -749,3 +749,47 @@ fn texture_transforms_and_vertex_colours_round_trip() {
             .all(|w| !w.contains("COLOR_0") && !w.contains("transform"))
     );
 }
+
+/// A camera's lens travels in `extras.lightlab.lens`; a prescription file named in it is
+/// found beside the glTF file; a malformed lens is refused with the camera's name.
+#[test]
+fn camera_lenses_round_trip_in_extras() {
+    use lightlab_scene::CameraLens;
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = builtin::builtin("shadows").unwrap();
+    s.cameras[0].lens = Some(CameraLens {
+        model: "thick-lens".into(),
+        aperture: Some(0.2),
+        focus_distance: Some(4.5),
+        thickness: Some(0.1),
+        scale: None,
+    });
+    let p = dir.path().join("lens.gltf");
+    gltf_io::export(&s, &p).unwrap();
+    let back = gltf_io::import(&p, LoadOptions::default()).unwrap();
+    assert_eq!(back.cameras[0].lens, s.cameras[0].lens);
+    // A prescription file is relative to the glTF file.
+    s.cameras[0].lens = Some(CameraLens {
+        model: "lens:my.lens".into(),
+        ..Default::default()
+    });
+    gltf_io::export(&s, &p).unwrap();
+    let back = gltf_io::import(&p, LoadOptions::default()).unwrap();
+    let want = format!("lens:{}", dir.path().join("my.lens").display());
+    assert_eq!(back.cameras[0].lens.as_ref().unwrap().model, want);
+    // Without a model, or with a number that is not one: refused, naming the camera.
+    let text = std::fs::read_to_string(&p).unwrap();
+    let original = "\"model\": \"lens:my.lens\"";
+    assert!(text.contains(original));
+    for bad in [
+        "\"x\": 1",
+        "\"model\": \"thin-lens\", \"aperture\": \"wide\"",
+    ] {
+        let q = dir.path().join("bad.gltf");
+        std::fs::write(&q, text.replace(original, bad)).unwrap();
+        let e = gltf_io::import(&q, LoadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("extras.lightlab.lens"), "{e}");
+    }
+}

@@ -83,6 +83,7 @@ impl OrbitCamera {
             yfov: self.yfov,
             znear: self.znear,
             zfar: self.zfar,
+            lens: None,
         }
     }
 
