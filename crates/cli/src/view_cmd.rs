@@ -8,6 +8,7 @@ use crate::techniques::{Bakes, Request, build};
 use anyhow::{Context, Result};
 use clap::Args;
 use lightlab_core::color::ToneMap;
+use lightlab_gpu::lens_morph::LensView;
 use lightlab_gpu::raster::Renderer;
 use lightlab_viewer::{ViewerConfig, run};
 use std::path::PathBuf;
@@ -95,8 +96,8 @@ pub fn view(a: &ViewArgs) -> Result<()> {
               name: &str,
               width: u32,
               height: u32|
-              -> Result<Renderer, lightlab_viewer::MakeError> {
-            let mut go = || -> Result<Renderer> {
+              -> Result<(Renderer, Option<Vec<Vec<LensView>>>), lightlab_viewer::MakeError> {
+            let mut go = || -> Result<(Renderer, Option<Vec<Vec<LensView>>>)> {
                 let req = Request {
                     scene: &scene_for_make,
                     technique: name.parse()?,
@@ -107,7 +108,7 @@ pub fn view(a: &ViewArgs) -> Result<()> {
                 };
                 let mut tr = build(ctx, &req, &mut bakes)?;
                 tr.update(ctx)?;
-                Ok(tr.renderer)
+                Ok((tr.renderer, tr.lens))
             };
             go().map_err(|e| format!("{e:#}").into())
         },

@@ -8,13 +8,7 @@ use lightlab_core::image::Image;
 use std::path::Path;
 
 fn relmse(a: &Path, b: &Path) -> f64 {
-    let (a, b) = (Image::read(a).unwrap(), Image::read(b).unwrap());
-    let (mut e, mut n) = (0.0f64, 0.0f64);
-    for (x, y) in a.data.iter().zip(&b.data) {
-        e += (*x - *y).length_squared() as f64;
-        n += y.length_squared() as f64;
-    }
-    e / n
+    relmse_images(&Image::read(a).unwrap(), &Image::read(b).unwrap())
 }
 
 /// Render `shadows` at `size` with `args`, into `out`.
@@ -171,4 +165,52 @@ fn a_gltf_camera_names_its_lens() {
     let read = |n: &str| Image::read(&p(n)).unwrap().data;
     assert_eq!(read("file.exr"), read("flags.exr"));
     assert_ne!(read("file.exr"), read("pinhole.exr"));
+}
+
+/// The viewer accumulates a lens's steps while the camera rests: once complete, its
+/// screenshot is `render`'s image through the same lens (thin lens and a traced lens).
+#[test]
+fn the_viewer_shows_the_lens_once_its_steps_are_done() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (shot, rendered) = (tmp.path().join("view.png"), tmp.path().join("render.png"));
+    let lenses: [&[&str]; 2] = [
+        &[
+            "--camera-model",
+            "thin-lens",
+            "--aperture",
+            "0.5",
+            "--lens-samples",
+            "4",
+        ],
+        &["--camera-model", "lens:biconvex", "--lens-samples", "3"],
+    ];
+    for lens in lenses {
+        let size = ["--width", "96", "--height", "72"];
+        let technique = ["--scene", "shadows", "--technique", "phong-shadow-volumes"];
+        let mut a = vec![
+            "view",
+            "--frames",
+            "6",
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ];
+        a.extend(technique.iter().chain(&size).chain(lens));
+        let o = lightlab(&a);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let mut a = vec!["render", "-o", rendered.to_str().unwrap()];
+        a.extend(technique.iter().chain(&size).chain(lens));
+        ok(&lightlab(&a));
+        let (a, b) = (Image::read(&shot).unwrap(), Image::read(&rendered).unwrap());
+        let e = relmse_images(&a, &b);
+        assert!(e < 1e-3, "{lens:?}: {e}");
+    }
+}
+
+fn relmse_images(a: &Image, b: &Image) -> f64 {
+    let (mut e, mut n) = (0.0f64, 0.0f64);
+    for (x, y) in a.data.iter().zip(&b.data) {
+        e += (*x - *y).length_squared() as f64;
+        n += y.length_squared() as f64;
+    }
+    e / n
 }

@@ -1,17 +1,42 @@
-//! The morph and accumulation of Heidrich's image-based lens model (1999 §11.2.1): each
-//! projection's render is drawn onto its film-grid mesh (`lightlab_core::lens::image_model`),
-//! reading the render where each vertex's traced ray meets the image plane, weighted by the
-//! vertex's exposure, and added into an `Rgba16Float` film (blendable on every adapter;
-//! `Rgba32Float` blending needs an optional feature).
+//! A camera lens's film: renders through a lens's views, accumulated. Each view is a
+//! perspective (a camera-space transform and an eye) and a mesh that morphs its render onto
+//! the film. For Heidrich's image-based lens model (1999 §11.2.1) the mesh is a projection's
+//! film grid (`lightlab_core::lens::image_model`), reading the render where each vertex's
+//! traced ray meets the image plane, weighted by the vertex's exposure; for a thin or thick
+//! lens (Haeberli & Akeley) it is the whole frame at weight 1/N. The film is `Rgba16Float`
+//! (blendable on every adapter; `Rgba32Float` blending needs an optional feature).
 
 use crate::GpuContext;
 use crate::resources::{ReadbackError, read_texture};
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use lightlab_core::image::Image;
 use lightlab_core::lens::image_model::MorphVertex;
 use wgpu::util::DeviceExt;
 
 const FILM: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// One render of a lens's image: camera space → the space the camera's projection applies
+/// to, the eye (camera space), and the mesh that puts the render on the film.
+#[derive(Clone, Debug)]
+pub struct LensView {
+    pub view: Mat4,
+    pub eye: Vec3,
+    pub vertices: Vec<MorphVertex>,
+    pub indices: Vec<u32>,
+}
+
+/// The whole frame at `weight`, unmorphed (a thin lens's accumulation).
+pub fn full_frame(weight: f32) -> (Vec<MorphVertex>, Vec<u32>) {
+    let v = |x: f32, y: f32| MorphVertex {
+        ndc: [x, y],
+        uv: [0.5 * (x + 1.0), 0.5 * (1.0 - y)],
+        weight,
+    };
+    (
+        vec![v(-1.0, -1.0), v(1.0, -1.0), v(-1.0, 1.0), v(1.0, 1.0)],
+        vec![0, 1, 3, 0, 3, 2],
+    )
+}
 
 /// A film that accumulates morphed projections.
 pub struct LensMorph {
@@ -112,7 +137,9 @@ impl LensMorph {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: FILM,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
         let film_view = film.create_view(&Default::default());
@@ -124,6 +151,11 @@ impl LensMorph {
             film_view,
             fresh: true,
         }
+    }
+
+    /// The film (for a display pass).
+    pub fn film_view(&self) -> &wgpu::TextureView {
+        &self.film_view
     }
 
     /// Start a new image (the next `add` clears the film).

@@ -17,6 +17,7 @@
 
 pub mod camera;
 pub mod display;
+pub mod lens;
 pub mod motion;
 
 use camera::OrbitCamera;
@@ -38,9 +39,22 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 /// Builds the renderer of technique `name` at `width`×`height` (the viewer then sets its
-/// camera). Errors are shown in the panel; the previous renderer stays.
-pub type MakeRenderer<'a> =
-    Box<dyn FnMut(&GpuContext, &str, u32, u32) -> Result<Renderer, MakeError> + 'a>;
+/// camera), and the camera lens's views in steps (None: a pinhole; see [`lens`]). Errors are
+/// shown in the panel; the previous renderer stays.
+pub type MakeRenderer<'a> = Box<
+    dyn FnMut(
+            &GpuContext,
+            &str,
+            u32,
+            u32,
+        ) -> Result<
+            (
+                Renderer,
+                Option<Vec<Vec<lightlab_gpu::lens_morph::LensView>>>,
+            ),
+            MakeError,
+        > + 'a,
+>;
 
 /// Why a technique's renderer could not be built (shown in the panel).
 pub type MakeError = Box<dyn std::error::Error + Send + Sync>;
@@ -186,6 +200,8 @@ struct Gfx {
     egui: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
     renderer: Option<Renderer>,
+    /// The camera lens's film, when the camera has a lens.
+    lens: Option<lens::LensState>,
     pending: egui::TexturesDelta,
 }
 
@@ -294,6 +310,7 @@ impl App<'_> {
             egui,
             egui_renderer,
             renderer: None,
+            lens: None,
             pending: Default::default(),
         })
     }
@@ -334,7 +351,9 @@ impl App<'_> {
             self.rebuild = false;
             let name = self.cfg.techniques[self.technique].clone();
             match (self.make)(&gfx.ctx, &name, w, h) {
-                Ok(r) => {
+                Ok((r, steps)) => {
+                    let (rw, rh) = r.size();
+                    gfx.lens = steps.map(|s| lens::LensState::new(&gfx.ctx, s, rw, rh));
                     gfx.renderer = Some(r);
                     self.message = None;
                 }
@@ -356,8 +375,18 @@ impl App<'_> {
             self.clock += dt;
         }
         motion::pose(&mut self.motion, self.clock, &gfx.ctx, renderer);
-        renderer.set_camera(&gfx.ctx, self.orbit.camera());
-        self.times = renderer.render(&gfx.ctx);
+        let camera = self.orbit.camera();
+        let transform = camera.transform;
+        renderer.set_camera(&gfx.ctx, camera);
+        match gfx.lens.as_mut() {
+            Some(l) => {
+                let moving = self.animate && self.motion.is_some();
+                if let Some(t) = l.step(&gfx.ctx, renderer, transform, moving) {
+                    self.times = t;
+                }
+            }
+            None => self.times = renderer.render(&gfx.ctx),
+        }
         let (rw, rh) = (renderer.settings.width, renderer.settings.height);
 
         // The panel.
@@ -367,6 +396,7 @@ impl App<'_> {
         let mut reset = false;
         let mut shot = false;
         let info = format!("{} ({:?})", gfx.ctx.info.name, gfx.ctx.info.backend);
+        let lens_progress = gfx.lens.as_ref().map(|l| l.progress());
         let show_ui = self.show_ui;
         let full = gfx.egui.egui_ctx().run_pass(raw, |ctx| {
             if !show_ui {
@@ -377,6 +407,9 @@ impl App<'_> {
                 .show(ctx, |ui| {
                     ui.label(format!("{}  ·  {rw}×{rh}", self.cfg.scene.name));
                     ui.label(&info);
+                    if let Some((done, all)) = lens_progress {
+                        ui.label(format!("lens: {done} of {all} aperture samples"));
+                    }
                     egui::ComboBox::from_label("technique")
                         .selected_text(&self.cfg.techniques[technique])
                         .show_ui(ui, |ui| {
@@ -447,12 +480,16 @@ impl App<'_> {
         let view = frame.texture.create_view(&Default::default());
         let mut enc = gfx.ctx.device.create_command_encoder(&Default::default());
         let renderer = gfx.renderer.as_ref().expect("renderer");
+        let (shown, scale) = match &gfx.lens {
+            Some(l) => l.image(),
+            None => (renderer.hdr_view(), 1.0),
+        };
         gfx.display.draw(
             &gfx.ctx,
             &mut enc,
-            renderer.hdr_view(),
+            shown,
             &view,
-            self.exposure,
+            self.exposure * scale,
             self.tone,
         );
         let ppp = full.pixels_per_point;
@@ -514,7 +551,9 @@ impl App<'_> {
         if self.want_screenshot || (done && self.cfg.screenshot_at_end) {
             self.want_screenshot = false;
             let path = self.cfg.screenshot.clone();
-            match screenshot(&gfx.ctx, renderer, &path, self.exposure, self.tone) {
+            let size = (renderer.settings.width, renderer.settings.height);
+            let exposure = self.exposure * scale;
+            match screenshot(&gfx.ctx, shown, size, &path, exposure, self.tone) {
                 Ok(()) => self.stats.screenshots.push(path),
                 Err(source) => {
                     self.fail(event_loop, ViewerError::Screenshot { path, source });
@@ -530,16 +569,17 @@ impl App<'_> {
     }
 }
 
-/// Write the renderer's current frame as the window displays it (without the panel).
+/// Write the shown image (the renderer's frame or the lens's film) as the window displays
+/// it (without the panel).
 fn screenshot(
     ctx: &GpuContext,
-    r: &Renderer,
+    shown: &wgpu::TextureView,
+    (w, h): (u32, u32),
     path: &Path,
     exposure: f32,
     tone: ToneMap,
 ) -> Result<(), ScreenshotError> {
-    let (w, h) = (r.settings.width, r.settings.height);
-    let px = display_to_rgb8(ctx, r.hdr_view(), w, h, exposure, tone)?;
+    let px = display_to_rgb8(ctx, shown, w, h, exposure, tone)?;
     let bytes: Vec<u8> = px.iter().flatten().copied().collect();
     lightlab_core::image::write_atomic(
         path,

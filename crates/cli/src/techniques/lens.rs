@@ -1,94 +1,88 @@
-//! A GPU technique's still image through a camera lens (Heidrich ch. 11): a thin or thick
-//! lens by Haeberli & Akeley's accumulation of off-axis projections, a traced lens by the
-//! image-based model (perspective renders morphed onto the film, `lightlab_gpu::lens_morph`).
+//! A GPU technique's image through a camera lens (Heidrich ch. 11), as steps of lens views
+//! (`lightlab_gpu::lens_morph`): a thin or thick lens by Haeberli & Akeley's accumulation of
+//! off-axis projections (one step per aperture point, the whole frame at weight 1/N), a
+//! traced lens by the image-based model (one step per sample point: its projections, each
+//! morphed onto its film cell). A still image renders every step; the viewer one per frame.
 
 use super::Request;
 use anyhow::Result;
 use lightlab_core::image::Image;
+use lightlab_core::lens::CameraModel;
 use lightlab_core::lens::image_model::{self, ImageModel};
-use lightlab_core::lens::{CameraModel, ThinLens};
 use lightlab_gpu::GpuContext;
-use lightlab_gpu::lens_morph::LensMorph;
+use lightlab_gpu::lens_morph::{LensMorph, LensView, full_frame};
 use lightlab_gpu::raster::Renderer;
 
-/// How a technique's still image goes through the camera's lens.
-pub enum LensPlan {
-    /// A thin or thick lens and its aperture points: one frame per point, averaged.
-    Accumulate(ThinLens, Vec<glam::Vec2>),
-    /// A traced lens's image-based model; the film is made on first use.
-    ImageBased {
-        model: ImageModel,
-        yfov: f32,
-        film: Option<LensMorph>,
-    },
+/// The views of the lens of `req` at its size, grouped in steps; None for a pinhole.
+pub fn lens_steps(req: &Request) -> Result<Option<Vec<Vec<LensView>>>> {
+    let lens = &req.args.lens;
+    let aspect = req.width as f32 / req.height as f32;
+    Ok(match lens.model(req.scene, req.camera, aspect)? {
+        CameraModel::Pinhole => None,
+        CameraModel::ThinLens(l) => {
+            let points = l.samples(lens.lens_samples.unwrap_or(64));
+            let (vertices, indices) = full_frame(1.0 / points.len() as f32);
+            let steps = points.iter().map(|p| {
+                vec![LensView {
+                    view: l.lens_view(*p),
+                    eye: l.eye(*p),
+                    vertices: vertices.clone(),
+                    indices: indices.clone(),
+                }]
+            });
+            Some(steps.collect())
+        }
+        CameraModel::Traced(system) => {
+            let model = image_model::build(&system, &lens.image_model()?);
+            anyhow::ensure!(
+                !model.projections.is_empty(),
+                "no light passes the lens: check --aperture and --lens-scale"
+            );
+            Some(image_based_steps(
+                &model,
+                req.scene.cameras[req.camera].yfov,
+                aspect,
+            ))
+        }
+    })
 }
 
-impl LensPlan {
-    /// The plan for `req`'s lens options; None for a pinhole.
-    pub fn new(req: &Request) -> Result<Option<LensPlan>> {
-        let lens = &req.args.lens;
-        let aspect = req.width as f32 / req.height as f32;
-        Ok(match lens.model(req.scene, req.camera, aspect)? {
-            CameraModel::Pinhole => None,
-            CameraModel::ThinLens(l) => Some(LensPlan::Accumulate(
-                l,
-                l.samples(lens.lens_samples.unwrap_or(64)),
-            )),
-            CameraModel::Traced(system) => {
-                let model = image_model::build(&system, &lens.image_model()?);
-                anyhow::ensure!(
-                    !model.projections.is_empty(),
-                    "no light passes the lens: check --aperture and --lens-scale"
-                );
-                Some(LensPlan::ImageBased {
-                    model,
-                    yfov: req.scene.cameras[req.camera].yfov,
-                    film: None,
-                })
-            }
-        })
-    }
-
-    /// The image through the lens (at the renderer's resolution).
-    pub fn image(&mut self, ctx: &GpuContext, r: &mut Renderer) -> Result<Image> {
-        let img = match self {
-            LensPlan::Accumulate(lens, points) => accumulate(ctx, r, lens, points)?,
-            LensPlan::ImageBased { model, yfov, film } => {
-                let (w, h) = r.size();
-                let film = film.get_or_insert_with(|| LensMorph::new(ctx, w, h));
-                film.clear();
-                for p in &model.projections {
-                    r.set_lens_view(ctx, Some((p.view(*yfov, w as f32 / h as f32), p.eye())));
-                    r.render(ctx);
-                    film.add(ctx, r.hdr_view(), &p.vertices, &p.indices());
-                }
-                film.read(ctx)?
-            }
+/// The image-based model's projections, one step per sample point.
+fn image_based_steps(model: &ImageModel, yfov: f32, aspect: f32) -> Vec<Vec<LensView>> {
+    let mut steps: Vec<Vec<LensView>> = Vec::new();
+    let mut last = None;
+    for p in &model.projections {
+        let view = LensView {
+            view: p.view(yfov, aspect),
+            eye: p.eye(),
+            vertices: p.vertices.clone(),
+            indices: p.indices(),
         };
-        r.set_lens_view(ctx, None);
-        Ok(img)
+        // Projections come grouped by their sample point.
+        match steps.last_mut() {
+            Some(step) if last == Some(p.point) => step.push(view),
+            _ => steps.push(vec![view]),
+        }
+        last = Some(p.point);
     }
+    steps
 }
 
-/// The average of one frame per aperture point of `lens` (Haeberli & Akeley's accumulation).
-fn accumulate(
+/// Render every view of `steps` through `r` onto `film` (made on first use) and read it.
+pub fn image(
     ctx: &GpuContext,
     r: &mut Renderer,
-    lens: &ThinLens,
-    points: &[glam::Vec2],
+    steps: &[Vec<LensView>],
+    film: &mut Option<LensMorph>,
 ) -> Result<Image> {
-    let mut sum: Option<Image> = None;
-    for p in points {
-        r.set_lens_view(ctx, Some((lens.lens_view(*p), lens.eye(*p))));
+    let (w, h) = r.size();
+    let film = film.get_or_insert_with(|| LensMorph::new(ctx, w, h));
+    film.clear();
+    for v in steps.iter().flatten() {
+        r.set_lens_view(ctx, Some((v.view, v.eye)));
         r.render(ctx);
-        let img = r.read_hdr(ctx)?;
-        match &mut sum {
-            None => sum = Some(img),
-            Some(s) => s.data.iter_mut().zip(&img.data).for_each(|(a, b)| *a += *b),
-        }
+        film.add(ctx, r.hdr_view(), &v.vertices, &v.indices);
     }
-    let mut img = sum.expect("at least one aperture point");
-    let k = 1.0 / points.len() as f32;
-    img.data.iter_mut().for_each(|c| *c *= k);
-    Ok(img)
+    r.set_lens_view(ctx, None);
+    Ok(film.read(ctx)?)
 }

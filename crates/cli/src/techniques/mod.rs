@@ -58,8 +58,9 @@ pub struct TechniqueRenderer {
     sh_light: Option<(ShProjector, Scene)>,
     debug_view: DebugView,
     ssaa: u32,
-    /// How a still image goes through the camera's lens (None: the pinhole).
-    lens: Option<lens::LensPlan>,
+    /// The camera lens's views, in steps (None: the pinhole), and the film they make.
+    pub lens: Option<Vec<Vec<lightlab_gpu::lens_morph::LensView>>>,
+    film: Option<lightlab_gpu::lens_morph::LensMorph>,
 }
 
 /// Build the renderer of a GPU technique.
@@ -93,7 +94,8 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
         sh_light,
         debug_view: req.args.lpv.debug_view,
         ssaa: req.args.raster.ssaa,
-        lens: lens::LensPlan::new(req)?,
+        lens: lens::lens_steps(req)?,
+        film: None,
     })
 }
 
@@ -119,8 +121,9 @@ impl TechniqueRenderer {
         r.set_dynamic_env_every(0);
         r.render(ctx);
         let times = r.render(ctx);
-        if let Some(plan) = &mut self.lens {
-            return Ok((plan.image(ctx, r)?.downsample(self.ssaa), times));
+        if let Some(steps) = &self.lens {
+            let img = lens::image(ctx, r, steps, &mut self.film)?;
+            return Ok((img.downsample(self.ssaa), times));
         }
         // A debug view's layer replaces the frame, which is then not read back.
         if self.technique.family() == Family::Lpv
