@@ -8,9 +8,8 @@ use crate::techniques::{Bakes, Request, build};
 use anyhow::{Context, Result};
 use clap::Args;
 use lightlab_core::color::ToneMap;
-use lightlab_gpu::lens_morph::LensView;
-use lightlab_gpu::raster::Renderer;
-use lightlab_viewer::{ViewerConfig, run};
+
+use lightlab_viewer::{Made, ViewerConfig, run};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -96,8 +95,8 @@ pub fn view(a: &ViewArgs) -> Result<()> {
               name: &str,
               width: u32,
               height: u32|
-              -> Result<(Renderer, Option<Vec<Vec<LensView>>>), lightlab_viewer::MakeError> {
-            let mut go = || -> Result<(Renderer, Option<Vec<Vec<LensView>>>)> {
+              -> Result<Made, lightlab_viewer::MakeError> {
+            let mut go = || -> Result<Made> {
                 let req = Request {
                     scene: &scene_for_make,
                     technique: name.parse()?,
