@@ -41,20 +41,14 @@ use winit::window::{Window, WindowId};
 /// Builds the renderer of technique `name` at `width`×`height` (the viewer then sets its
 /// camera), and the camera lens's views in steps (None: a pinhole; see [`lens`]). Errors are
 /// shown in the panel; the previous renderer stays.
-pub type MakeRenderer<'a> = Box<
-    dyn FnMut(
-            &GpuContext,
-            &str,
-            u32,
-            u32,
-        ) -> Result<
-            (
-                Renderer,
-                Option<Vec<Vec<lightlab_gpu::lens_morph::LensView>>>,
-            ),
-            MakeError,
-        > + 'a,
->;
+pub type MakeRenderer<'a> =
+    Box<dyn FnMut(&GpuContext, &str, u32, u32) -> Result<Made, MakeError> + 'a>;
+
+/// A camera lens's views, in the steps the viewer renders one per frame.
+pub type LensSteps = Vec<Vec<lightlab_gpu::lens_morph::LensView>>;
+
+/// What [`MakeRenderer`] makes: the renderer and the lens's views (None: a pinhole).
+pub type Made = (Renderer, Option<LensSteps>);
 
 /// Why a technique's renderer could not be built (shown in the panel).
 pub type MakeError = Box<dyn std::error::Error + Send + Sync>;
