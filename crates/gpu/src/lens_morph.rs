@@ -228,6 +228,11 @@ impl LensMorph {
         ctx.queue.submit([enc.finish()]);
     }
 
+    /// Wait until the GPU has drawn everything added so far (for timing).
+    pub fn wait(&self, ctx: &GpuContext) {
+        let _ = ctx.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+
     /// The film's image (linear radiance).
     pub fn read(&self, ctx: &GpuContext) -> Result<Image, ReadbackError> {
         let bytes = read_texture(ctx, &self.film, 8)?;

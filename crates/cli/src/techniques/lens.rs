@@ -11,7 +11,8 @@ use lightlab_core::lens::CameraModel;
 use lightlab_core::lens::image_model::{self, ImageModel};
 use lightlab_gpu::GpuContext;
 use lightlab_gpu::lens_morph::{LensMorph, LensView, full_frame};
-use lightlab_gpu::raster::Renderer;
+use lightlab_gpu::raster::{FrameTimes, Renderer};
+use std::time::Instant;
 
 /// The views of the lens of `req` at its size, grouped in steps; None for a pinhole.
 pub fn lens_steps(req: &Request) -> Result<Option<Vec<Vec<LensView>>>> {
@@ -68,21 +69,31 @@ fn image_based_steps(model: &ImageModel, yfov: f32, aspect: f32) -> Vec<Vec<Lens
     steps
 }
 
-/// Render every view of `steps` through `r` onto `film` (made on first use) and read it.
+/// Render every view of `steps` through `r` onto `film` (made on first use) and read it;
+/// with the whole lens frame's times (wall: every view and morph until the GPU is idle; GPU:
+/// the views' passes summed).
 pub fn image(
     ctx: &GpuContext,
     r: &mut Renderer,
     steps: &[Vec<LensView>],
     film: &mut Option<LensMorph>,
-) -> Result<Image> {
+) -> Result<(Image, FrameTimes)> {
     let (w, h) = r.size();
     let film = film.get_or_insert_with(|| LensMorph::new(ctx, w, h));
     film.clear();
+    let t0 = Instant::now();
+    let mut times = FrameTimes::default();
     for v in steps.iter().flatten() {
         r.set_lens_view(ctx, Some((v.view, v.eye)));
-        r.render(ctx);
+        let t = r.render(ctx);
+        for (k, ms) in t.gpu_ms {
+            *times.gpu_ms.entry(k).or_default() += ms;
+        }
+        times.cpu_volumes_ms += t.cpu_volumes_ms;
         film.add(ctx, r.hdr_view(), &v.vertices, &v.indices);
     }
+    film.wait(ctx);
+    times.wall_ms = t0.elapsed().as_secs_f64() * 1e3;
     r.set_lens_view(ctx, None);
-    Ok(film.read(ctx)?)
+    Ok((film.read(ctx)?, times))
 }

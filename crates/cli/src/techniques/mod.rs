@@ -122,7 +122,8 @@ impl TechniqueRenderer {
         r.render(ctx);
         let times = r.render(ctx);
         if let Some(steps) = &self.lens {
-            let img = lens::image(ctx, r, steps, &mut self.film)?;
+            // The frame's times are the whole lens image's (every view and morph).
+            let (img, times) = lens::image(ctx, r, steps, &mut self.film)?;
             return Ok((img.downsample(self.ssaa), times));
         }
         // A debug view's layer replaces the frame, which is then not read back.

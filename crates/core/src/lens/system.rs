@@ -205,8 +205,20 @@ impl LensSystem {
     /// Trace a ray from the film side (camera space, travelling towards −z) through every
     /// surface; `clip`: stop at the apertures. None when it misses a surface, is blocked or
     /// is totally reflected. Returns the ray leaving the front surface.
-    pub fn trace(&self, mut o: DVec3, mut d: DVec3, clip: bool) -> Option<(DVec3, DVec3)> {
-        for i in (0..self.elements.len()).rev() {
+    pub fn trace(&self, o: DVec3, d: DVec3, clip: bool) -> Option<(DVec3, DVec3)> {
+        self.trace_until(o, d, clip, 0)
+    }
+
+    /// [`trace`](Self::trace) through the surfaces from the film's side down to surface
+    /// `first` (inclusive): the ray leaving it.
+    pub fn trace_until(
+        &self,
+        mut o: DVec3,
+        mut d: DVec3,
+        clip: bool,
+        first: usize,
+    ) -> Option<(DVec3, DVec3)> {
+        for i in (first..self.elements.len()).rev() {
             let e = &self.elements[i];
             let zv = self.vertex_z[i];
             let (p, normal) = if e.radius == 0.0 || e.stop {
@@ -245,6 +257,94 @@ impl LensSystem {
             }
         }
         Some((o, d))
+    }
+
+    /// The aperture stop: the `stop` surface, else the one with the smallest aperture.
+    pub fn stop_index(&self) -> usize {
+        self.elements
+            .iter()
+            .position(|e| e.stop)
+            .or_else(|| {
+                (0..self.elements.len()).min_by(|&a, &b| {
+                    self.elements[a]
+                        .aperture
+                        .total_cmp(&self.elements[b].aperture)
+                })
+            })
+            .expect("a lens has surfaces")
+    }
+
+    /// Ray aiming: the unit direction from film point `film` (camera space) whose ray meets
+    /// the stop's plane (through its vertex) at `target` (x, y), ignoring apertures. Newton
+    /// steps on the rear-plane point the ray is aimed at, with a finite-difference Jacobian,
+    /// from a start inside the film point's exit pupil. None when it does not converge.
+    pub fn aim(&self, film: DVec3, target: DVec2) -> Option<DVec3> {
+        self.aim_from(film, target, None).map(|(d, _)| d)
+    }
+
+    /// [`aim`](Self::aim) from a start on the rear plane (a neighbouring film point's
+    /// solution, say); returns the direction and the rear-plane point it aims at.
+    pub fn aim_from(
+        &self,
+        film: DVec3,
+        target: DVec2,
+        start: Option<DVec2>,
+    ) -> Option<(DVec3, DVec2)> {
+        let stop = self.stop_index();
+        let at_stop = |q: DVec2| -> Option<DVec2> {
+            let d = (q.extend(self.rear_z()) - film).normalize();
+            let (o, d) = self.trace_until(film, d, false, stop + 1)?;
+            let t = (self.vertex_z[stop] - o.z) / d.z;
+            Some((o + d * t).truncate())
+        };
+        let (lo, hi) = self.pupil_box(film.truncate().length());
+        let r_stop = 0.5 * self.elements[stop].aperture;
+        let rot = film.truncate().try_normalize().unwrap_or(DVec2::X);
+        let turn = |v: DVec2| DVec2::new(rot.x * v.x - rot.y * v.y, rot.y * v.x + rot.x * v.y);
+        let mut q = start
+            .unwrap_or_else(|| turn((lo + hi) * 0.5) + target * (0.5 * (hi.x - lo.x) / r_stop));
+        let h = 1e-4 * r_stop.max(1e-6);
+        let mut g = at_stop(q)? - target;
+        // A one-sided difference, taken backwards where the forward ray misses a surface.
+        let slope = |q: DVec2, g: DVec2, e: DVec2| {
+            at_stop(q + e * h)
+                .map(|p| (p - target - g) / h)
+                .or_else(|| at_stop(q - e * h).map(|p| (g - (p - target)) / h))
+        };
+        for _ in 0..24 {
+            if g.length() < 1e-9 * r_stop.max(1e-3) {
+                return Some(((q.extend(self.rear_z()) - film).normalize(), q));
+            }
+            let gx = slope(q, g, DVec2::X)?;
+            let gy = slope(q, g, DVec2::Y)?;
+            let det = gx.x * gy.y - gx.y * gy.x;
+            if det.abs() < 1e-18 {
+                return None;
+            }
+            let step = DVec2::new(gy.y * g.x - gy.x * g.y, -gx.y * g.x + gx.x * g.y) / det;
+            // Damped: halve the step until the ray still passes and the miss shrinks.
+            let mut k = 1.0;
+            loop {
+                if let Some(n) = at_stop(q - step * k).map(|p| p - target)
+                    && n.length() < g.length()
+                {
+                    q -= step * k;
+                    g = n;
+                    break;
+                }
+                k *= 0.5;
+                if k < 1e-4 {
+                    return None;
+                }
+            }
+        }
+        None
+    }
+
+    /// The stop's radius and the camera-space z of its plane.
+    pub fn stop_disc(&self) -> (f64, f64) {
+        let stop = self.stop_index();
+        (0.5 * self.elements[stop].aperture, self.vertex_z[stop])
     }
 
     /// The exit-pupil box of the ring containing film radius `r`.
