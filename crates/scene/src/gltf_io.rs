@@ -291,6 +291,30 @@ struct Importer<'a> {
     instanced_triangles: u64,
 }
 
+/// A camera's glTF object, its lens in `extras.lightlab.lens`.
+fn camera_json(c: &Camera) -> Value {
+    let mut persp = json!({ "yfov": c.yfov, "znear": c.znear });
+    if let Some(f) = c.zfar {
+        persp["zfar"] = json!(f);
+    }
+    let mut cam = json!({ "name": c.name, "type": "perspective", "perspective": persp });
+    if let Some(l) = &c.lens {
+        let mut lens = json!({ "model": l.model });
+        for (key, v) in [
+            ("aperture", l.aperture),
+            ("focusDistance", l.focus_distance),
+            ("thickness", l.thickness),
+            ("scale", l.scale),
+        ] {
+            if let Some(v) = v {
+                lens[key] = json!(v);
+            }
+        }
+        cam["extras"] = json!({ "lightlab": { "lens": lens } });
+    }
+    cam
+}
+
 /// A camera's `extras.lightlab.lens` (see `CameraLens`); a prescription path is made
 /// relative to the glTF file's folder.
 fn camera_lens(cam: &gltf::Camera, path: &Path) -> Result<Option<CameraLens>, SceneError> {
@@ -1515,26 +1539,7 @@ impl Writer {
         }
         let mut cameras = vec![];
         for (i, c) in scene.cameras.iter().enumerate() {
-            let mut persp = json!({ "yfov": c.yfov, "znear": c.znear });
-            if let Some(f) = c.zfar {
-                persp["zfar"] = json!(f);
-            }
-            let mut cam = json!({ "name": c.name, "type": "perspective", "perspective": persp });
-            if let Some(l) = &c.lens {
-                let mut lens = json!({ "model": l.model });
-                for (key, v) in [
-                    ("aperture", l.aperture),
-                    ("focusDistance", l.focus_distance),
-                    ("thickness", l.thickness),
-                    ("scale", l.scale),
-                ] {
-                    if let Some(v) = v {
-                        lens[key] = json!(v);
-                    }
-                }
-                cam["extras"] = json!({ "lightlab": { "lens": lens } });
-            }
-            cameras.push(cam);
+            cameras.push(camera_json(c));
             nodes.push(
                 json!({ "name": c.name, "camera": i, "matrix": c.transform.to_cols_array() }),
             );

@@ -165,6 +165,45 @@ pub fn run(config: ViewerConfig, make: MakeRenderer<'_>) -> Result<ViewerStats, 
     Ok(app.stats)
 }
 
+/// What the panel lets the user change in a frame.
+struct Choices {
+    technique: usize,
+    exposure: f32,
+    tone: ToneMap,
+    animate: bool,
+    reset: bool,
+    shot: bool,
+}
+
+/// The panel's header, technique, exposure, tone, motion and buttons.
+fn panel(ui: &mut egui::Ui, techniques: &[String], header: &str, c: &mut Choices, motion: bool) {
+    ui.label(header);
+    egui::ComboBox::from_label("technique")
+        .selected_text(&techniques[c.technique])
+        .show_ui(ui, |ui| {
+            for (i, t) in techniques.iter().enumerate() {
+                ui.selectable_value(&mut c.technique, i, t);
+            }
+        });
+    ui.add(
+        egui::Slider::new(&mut c.exposure, 0.01..=100.0)
+            .logarithmic(true)
+            .text("exposure"),
+    );
+    ui.horizontal(|ui| {
+        ui.selectable_value(&mut c.tone, ToneMap::Filmic, "filmic");
+        ui.selectable_value(&mut c.tone, ToneMap::Reinhard, "Reinhard");
+        ui.selectable_value(&mut c.tone, ToneMap::Clamp, "clamp");
+    });
+    if motion {
+        ui.checkbox(&mut c.animate, "move the mirror-like objects (M)");
+    }
+    ui.horizontal(|ui| {
+        c.reset = ui.button("reset camera (R)").clicked();
+        c.shot = ui.button("screenshot (P)").clicked();
+    });
+}
+
 /// The panel's frame and pass times, and the last error.
 fn timings(ui: &mut egui::Ui, frame_ms: f64, times: &FrameTimes, message: Option<&String>) {
     ui.label(format!("frame {:.2} ms (wall, smoothed)", frame_ms));
@@ -385,12 +424,21 @@ impl App<'_> {
 
         // The panel.
         let raw = gfx.egui.take_egui_input(&gfx.window);
-        let (mut technique, mut exposure, mut tone) = (self.technique, self.exposure, self.tone);
-        let mut animate = self.animate;
-        let mut reset = false;
-        let mut shot = false;
-        let info = format!("{} ({:?})", gfx.ctx.info.name, gfx.ctx.info.backend);
-        let lens_progress = gfx.lens.as_ref().map(|l| l.progress());
+        let mut c = Choices {
+            technique: self.technique,
+            exposure: self.exposure,
+            tone: self.tone,
+            animate: self.animate,
+            reset: false,
+            shot: false,
+        };
+        let mut header = format!(
+            "{}  ·  {rw}×{rh}\n{} ({:?})",
+            self.cfg.scene.name, gfx.ctx.info.name, gfx.ctx.info.backend
+        );
+        if let Some((done, all)) = gfx.lens.as_ref().map(|l| l.progress()) {
+            header += &format!("\nlens: {done} of {all} aperture samples");
+        }
         let show_ui = self.show_ui;
         let full = gfx.egui.egui_ctx().run_pass(raw, |ctx| {
             if !show_ui {
@@ -399,35 +447,7 @@ impl App<'_> {
             egui::Window::new("lightlab")
                 .default_pos([10.0, 10.0])
                 .show(ctx, |ui| {
-                    ui.label(format!("{}  ·  {rw}×{rh}", self.cfg.scene.name));
-                    ui.label(&info);
-                    if let Some((done, all)) = lens_progress {
-                        ui.label(format!("lens: {done} of {all} aperture samples"));
-                    }
-                    egui::ComboBox::from_label("technique")
-                        .selected_text(&self.cfg.techniques[technique])
-                        .show_ui(ui, |ui| {
-                            for (i, t) in self.cfg.techniques.iter().enumerate() {
-                                ui.selectable_value(&mut technique, i, t);
-                            }
-                        });
-                    ui.add(
-                        egui::Slider::new(&mut exposure, 0.01..=100.0)
-                            .logarithmic(true)
-                            .text("exposure"),
-                    );
-                    ui.horizontal(|ui| {
-                        ui.selectable_value(&mut tone, ToneMap::Filmic, "filmic");
-                        ui.selectable_value(&mut tone, ToneMap::Reinhard, "Reinhard");
-                        ui.selectable_value(&mut tone, ToneMap::Clamp, "clamp");
-                    });
-                    if self.motion.is_some() {
-                        ui.checkbox(&mut animate, "move the mirror-like objects (M)");
-                    }
-                    ui.horizontal(|ui| {
-                        reset = ui.button("reset camera (R)").clicked();
-                        shot = ui.button("screenshot (P)").clicked();
-                    });
+                    panel(ui, &self.cfg.techniques, &header, &mut c, self.motion.is_some());
                     ui.separator();
                     timings(ui, self.frame_ms, &self.times, self.message.as_ref());
                     ui.separator();
@@ -440,17 +460,17 @@ impl App<'_> {
             .handle_platform_output(&gfx.window, std::mem::take(&mut full.platform_output));
         // Texture updates wait in `pending` until a frame is actually drawn.
         gfx.pending.append(std::mem::take(&mut full.textures_delta));
-        if technique != self.technique {
-            self.technique = technique;
+        if c.technique != self.technique {
+            self.technique = c.technique;
             self.rebuild = true;
         }
-        self.exposure = exposure;
-        self.tone = tone;
-        self.animate = animate;
-        if reset {
+        self.exposure = c.exposure;
+        self.tone = c.tone;
+        self.animate = c.animate;
+        if c.reset {
             self.orbit = self.home.clone();
         }
-        self.want_screenshot |= shot;
+        self.want_screenshot |= c.shot;
 
         // Present.
         let frame = match gfx.surface.get_current_texture() {
