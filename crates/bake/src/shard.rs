@@ -648,6 +648,13 @@ pub struct RenderSpec {
     /// PNG output: exposure and tone operator (by name).
     pub exposure: f32,
     pub tonemap: String,
+    /// The camera's lens (`CameraModel::describe`; parts written before lenses: a pinhole).
+    #[serde(default = "pinhole")]
+    pub camera_model: String,
+}
+
+fn pinhole() -> String {
+    "pinhole".into()
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

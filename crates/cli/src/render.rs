@@ -224,6 +224,7 @@ fn render_shard(
         camera: s.camera,
         exposure: a.exposure,
         tonemap: a.tonemap.name().into(),
+        camera_model: settings.lens.describe(),
     };
     let accel = Accel::new(scene);
     let pt = PathTracer::new(scene, &accel);

@@ -154,6 +154,20 @@ fn sharded_bakes_and_renders_merge_to_the_one_machine_result() {
     let merged = t.join("merged.exr");
     ok(&merge(&parts, &merged));
     assert!(std::fs::read(&whole).unwrap() == std::fs::read(&merged).unwrap());
+    // A part rendered through another lens belongs to another render.
+    let lens = t.join("render-part-lens");
+    render(&["--shard", "2/3", "--camera-model", "lens:doublet"], &lens);
+    let o = merge(
+        &[parts[0].clone(), parts[1].clone(), lens],
+        &t.join("mixed.exr"),
+    );
+    assert!(!o.status.success(), "a part through another lens merged");
+    assert!(
+        stderr(&o).contains("render settings differs"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!t.join("mixed.exr").exists());
 }
 
 #[test]

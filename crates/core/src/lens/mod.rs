@@ -32,6 +32,42 @@ pub enum CameraModel {
     Traced(std::sync::Arc<system::LensSystem>),
 }
 
+impl CameraModel {
+    /// A one-line description that differs when the images would: the model and every
+    /// number that shapes it (recorded by sharded renders, so that parts through different
+    /// lenses do not merge).
+    pub fn describe(&self) -> String {
+        match self {
+            CameraModel::Pinhole => "pinhole".into(),
+            CameraModel::ThinLens(l) => format!(
+                "thin lens: aperture {} focus {} thickness {}",
+                l.aperture, l.focus_distance, l.thickness
+            ),
+            CameraModel::Traced(s) => {
+                let surfaces: Vec<String> = s
+                    .elements
+                    .iter()
+                    .map(|e| {
+                        let kind = if e.stop { "stop" } else { "surface" };
+                        format!(
+                            "{kind} {} {} {} {}",
+                            e.radius, e.thickness, e.ior, e.aperture
+                        )
+                    })
+                    .collect();
+                format!(
+                    "lens '{}': focus {} film {}×{}; {}",
+                    s.name,
+                    s.focus_distance,
+                    2.0 * s.film_half.x,
+                    2.0 * s.film_half.y,
+                    surfaces.join("; ")
+                )
+            }
+        }
+    }
+}
+
 /// A thin (or thick) lens: aperture diameter, focus distance and the separation of the
 /// principal planes (0: thin), in scene units.
 #[derive(Clone, Copy, Debug, PartialEq)]
