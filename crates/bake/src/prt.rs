@@ -329,6 +329,18 @@ pub(crate) fn transfer_ao_from(
     bounces: &[VertexTransfer],
     first: u64,
 ) -> Result<(Vec<f32>, Vec<f32>), TransferError> {
+    transfer_ao_seeded(scene, accel, points, s, bounces, &|k| first + k as u64)
+}
+
+/// [`transfer_ao_from`] with point k drawing its directions from seed index `seed(k)`.
+pub(crate) fn transfer_ao_seeded(
+    scene: &Scene,
+    accel: &Accel,
+    points: &[(Vec3, Vec3, Vec3)],
+    s: &TransferSettings,
+    bounces: &[VertexTransfer],
+    seed: &(dyn Fn(usize) -> u64 + Sync),
+) -> Result<(Vec<f32>, Vec<f32>), TransferError> {
     check(s)?;
     let nc = sh::num_coeffs(s.bands);
     let zonal = sh::clamped_cosine_zonal(s.bands);
@@ -347,7 +359,7 @@ pub(crate) fn transfer_ao_from(
                 }
                 return;
             }
-            let k = first + k as u64;
+            let k = seed(k);
             gather_point(scene, accel, p, n, ng, s, k, None, o);
             *ao = o[0] / y0;
             let mut add = vec![0.0f32; nc];

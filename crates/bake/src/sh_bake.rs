@@ -29,6 +29,8 @@ pub(crate) struct Prepared {
     detail: Option<(DetailProjector, Scene, Accel)>,
     /// What inter-reflected transfer gathers from (empty otherwise, or when not asked for).
     sources: Vec<VertexTransfer>,
+    /// An animated scene's occlusion groups (each moving instance shadows only itself).
+    groups: Option<crate::occlusion_groups::Groups>,
 }
 
 /// One page's computed texels: their slot indices, surface points, transfer (nc floats each)
@@ -71,8 +73,25 @@ pub(crate) fn prepare(
         accel,
         detail,
         sources: vec![],
+        groups: None,
     };
-    if with_sources && matches!(s.kind, TransferKind::Interreflected { .. }) {
+    if let Some(of_instance) = crate::occlusion_groups::assign(&prep.scene) {
+        if matches!(s.kind, TransferKind::Shooting(_)) {
+            return Err(crate::BakeError::Settings(
+                "CaSHL shooting bakes one transfer for the whole scene, but the scene is \
+                 animated and its moving objects need transfer of their own: use \
+                 --transfer shadowed or interreflected"
+                    .into(),
+            ));
+        }
+        let (tscene, _) = prep.transfer_scene();
+        prep.groups = Some(crate::occlusion_groups::build(
+            tscene,
+            of_instance,
+            s,
+            with_sources,
+        )?);
+    } else if with_sources && matches!(s.kind, TransferKind::Interreflected { .. }) {
         let (tscene, taccel) = prep.transfer_scene();
         prep.sources = crate::prt::vertex_transfer(tscene, taccel, s)?.1;
     }
@@ -92,6 +111,14 @@ impl Prepared {
             None => (&self.scene, &self.accel),
         }
     }
+}
+
+/// The instance of each of page `k`'s texels `idx`.
+pub(crate) fn page_instances(prep: &Prepared, k: usize, idx: &[usize]) -> Vec<u32> {
+    let page = &prep.texels.pages[k];
+    idx.iter()
+        .map(|&i| page.samples[i].as_ref().expect("filtered").instance)
+        .collect()
 }
 
 /// Page `k`'s gathered texels (a sample, valid) in slot order, as surface points; detail
@@ -139,12 +166,13 @@ pub(crate) fn page_surface(
     (idx, surface)
 }
 
-/// Transfer and ambient occlusion of `points`, the run of a page's points from index `first`.
-/// Shooting starts from the shadowed transfer.
+/// Transfer and ambient occlusion of `points` (on `instances`), the run of a page's points
+/// from index `first`. Shooting starts from the shadowed transfer.
 pub(crate) fn page_transfer(
     prep: &Prepared,
     s: &TransferSettings,
     points: &[SurfacePoint],
+    instances: &[u32],
     first: u64,
 ) -> Result<(Vec<f32>, Vec<f32>), crate::BakeError> {
     let direct_s = match s.kind {
@@ -158,15 +186,43 @@ pub(crate) fn page_transfer(
         .iter()
         .map(|sp| (sp.p + sp.ng * crate::prt::ray_eps(sp.p), sp.ns, sp.ng))
         .collect();
-    let (tscene, taccel) = prep.transfer_scene();
-    Ok(crate::prt::transfer_ao_from(
-        tscene,
-        taccel,
-        &pts,
-        &direct_s,
-        &prep.sources,
-        first,
-    )?)
+    let Some(groups) = &prep.groups else {
+        let (tscene, taccel) = prep.transfer_scene();
+        return Ok(crate::prt::transfer_ao_seeded(
+            tscene,
+            taccel,
+            &pts,
+            &direct_s,
+            &prep.sources,
+            &|j| first + j as u64,
+        )?);
+    };
+    // Each group's points against its own geometry; a point keeps its seed (its index).
+    let nc = sh::num_coeffs(s.bands);
+    let mut tr = vec![0.0f32; pts.len() * nc];
+    let mut ao = vec![1.0f32; pts.len()];
+    for (g, part) in groups.parts.iter().enumerate() {
+        let sel: Vec<usize> = (0..pts.len())
+            .filter(|&j| groups.of_instance[instances[j] as usize] == g)
+            .collect();
+        if sel.is_empty() {
+            continue;
+        }
+        let sub: Vec<_> = sel.iter().map(|&j| pts[j]).collect();
+        let (t, a) = crate::prt::transfer_ao_seeded(
+            &part.scene,
+            &part.accel,
+            &sub,
+            &direct_s,
+            &part.sources,
+            &|j| first + sel[j] as u64,
+        )?;
+        for (q, &j) in sel.iter().enumerate() {
+            tr[j * nc..(j + 1) * nc].copy_from_slice(&t[q * nc..(q + 1) * nc]);
+            ao[j] = a[q];
+        }
+    }
+    Ok((tr, ao))
 }
 
 /// CaSHL: the bounces by shooting between all texels of all pages, in place.
@@ -304,7 +360,8 @@ pub fn bake_sh_lightmaps(
             return Err(crate::BakeError::Cancelled);
         }
         let (idx, surface) = page_surface(&prep, s, k, &mut stats);
-        let (tr, ao) = page_transfer(&prep, s, &surface, 0)?;
+        let inst = page_instances(&prep, k, &idx);
+        let (tr, ao) = page_transfer(&prep, s, &surface, &inst, 0)?;
         computed.push((idx, surface, tr, ao));
     }
     progress("texel transfer", total, total);

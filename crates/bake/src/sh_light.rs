@@ -303,6 +303,7 @@ mod tests {
             environment: None,
             cameras: vec![],
             warnings: vec![],
+            animation: None,
         }
     }
 

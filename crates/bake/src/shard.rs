@@ -320,7 +320,8 @@ pub fn bake_sh_part(
         let inside = |&i: &usize| range.contains(&(first_slot + i as u64));
         let a = idx.iter().position(inside).unwrap_or(idx.len());
         let b = a + idx[a..].iter().take_while(|&i| inside(i)).count();
-        let (tr, ao) = sh_bake::page_transfer(&prep, s, &surface[a..b], a as u64)?;
+        let inst = sh_bake::page_instances(&prep, k, &idx[a..b]);
+        let (tr, ao) = sh_bake::page_transfer(&prep, s, &surface[a..b], &inst, a as u64)?;
         for j in 0..b - a {
             out.extend_from_slice(&tr[j * nc..(j + 1) * nc]);
             out.push(ao[j]);

@@ -79,6 +79,20 @@ pub enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Hierarchical PRT's variants against the reference on an animated scene (CPU): error,
+    /// stability, filter time against moving objects.
+    Hprt {
+        #[arg(long, default_value = "prt-dynamic")]
+        scene: String,
+        #[command(flatten)]
+        bake: BakeArgs,
+        #[command(flatten)]
+        hprt: crate::bench_hprt::HprtBenchArgs,
+        #[command(flatten)]
+        load: LoadArgs,
+        #[arg(long)]
+        json: bool,
+    },
     /// Milliseconds per pass of a GPU technique (GPU timestamps where the adapter has them).
     Frame {
         #[arg(long)]
@@ -119,6 +133,13 @@ pub fn run(cmd: BenchCommand) -> Result<()> {
             load,
             json,
         } => bench_env((&scene, &load), directions, json),
+        BenchCommand::Hprt {
+            scene,
+            bake,
+            hprt,
+            load,
+            json,
+        } => crate::bench_hprt::run((&scene, &load), &bake, &hprt, json),
         BenchCommand::Frame {
             scene,
             technique,
@@ -489,6 +510,8 @@ struct FrameSamples {
     wall: Vec<f64>,
     cpu: Vec<f64>,
     sh_light: Vec<f64>,
+    /// Hierarchical PRT: nodes whose filters were recomputed per frame.
+    hprt_nodes: Vec<f64>,
 }
 
 /// `lightlab bench frame`: milliseconds per pass of a GPU technique.
@@ -536,8 +559,15 @@ fn bench_frame(
             w.time = a.raster.wind_time + frame as f32 / 60.0;
             r.set_wind(&ctx, w)?;
         }
+        // An animated scene plays (moving objects relight the SH techniques).
+        if scene.animation.is_some() {
+            tr.pose(&ctx, frame as u32 + 1)?;
+        }
         if let Some(ms) = tr.update(&ctx)? {
             m.sh_light.push(ms);
+        }
+        if let Some(st) = tr.hprt_stats() {
+            m.hprt_nodes.push(st.nodes as f64);
         }
         let t = tr.renderer.render(&ctx);
         for (k, v) in &t.gpu_ms {
@@ -601,6 +631,13 @@ fn report_frame(
     let projection = median(m.sh_light);
     if projector {
         println!("  {:<16} {projection:>9.3} ms", "CPU SH light");
+    }
+    if !m.hprt_nodes.is_empty() {
+        println!(
+            "  {:<16} {:>9.1} (of the light above: filters of the objects' moves)",
+            "filters / frame",
+            median(m.hprt_nodes)
+        );
     }
     println!(
         "  {:<16} {wall:>9.3} ms (submit to idle, incl. readback of timings)",

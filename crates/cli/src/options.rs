@@ -165,6 +165,12 @@ pub struct TechniqueArgs {
     pub lpv: LpvArgs,
     #[command(flatten)]
     pub lens: LensArgs,
+    /// Pose an animated scene (`prt-dynamic`, or a glTF file with an animation) at frame K,
+    /// in the reference and in every technique alike. The light-map and SH techniques bake
+    /// the rest pose and move the objects: a moving object's SH transfer holds its own
+    /// self-shadowing only, and `prt-hierarchical` adds the shadows between objects.
+    #[arg(long, value_name = "K")]
+    pub frame: Option<u32>,
 }
 
 /// How the camera forms its image: `pinhole`, `thin-lens`, `thick-lens`, or `lens:FILE`
@@ -809,6 +815,8 @@ pub struct ShArgs {
     /// Representatives of `shl-compressed` (Fuchs §5.6; at most 65536).
     #[arg(long, default_value_t = 4096)]
     pub sh_representatives: usize,
+    #[command(flatten)]
+    pub hprt: HprtArgs,
 }
 
 impl Default for ShArgs {
@@ -819,6 +827,100 @@ impl Default for ShArgs {
             sh_window_size: None,
             sh_filter: None,
             sh_representatives: 4096,
+            hprt: HprtArgs::default(),
+        }
+    }
+}
+
+/// Options of `prt-hierarchical` (McKenzie Chapter ch. 5; docs/prt.md).
+#[derive(Args, Clone, Debug, Default)]
+pub struct HprtArgs {
+    /// The shadowing hierarchy: `names` (instance names as paths, `ground/tile_0_0` under a
+    /// composite `ground`; a flat tree when no name has a `/`), `flat` (one root over every
+    /// instance) or `proximity` (instances whose boxes lie within 5 % of the scene's size of
+    /// each other share a composite).
+    #[arg(long, default_value = "names")]
+    pub hprt_tree: HprtTree,
+    /// How filter and light combine: `masked` (Hann-windowed triple product, McKenzie's
+    /// choice), `product` (plain triple product) or `subtract`.
+    #[arg(long)]
+    pub hprt_combine: Option<lightlab_bake::hprt::Combine>,
+    /// `mask` (each point's occluders — the siblings of its node and of every ancestor —
+    /// cast once, the blocked directions removed once) or `descent` (the thesis's: a child
+    /// takes its parent's filter less what its siblings block).
+    #[arg(long)]
+    pub hprt_filters: Option<lightlab_bake::hprt::FilterMode>,
+    /// A filter per sample point (`point`) or one per node from its centre (`node`).
+    #[arg(long)]
+    pub hprt_scope: Option<lightlab_bake::hprt::Scope>,
+    /// Occluders' `faces`, or their bounding boxes (`blob`).
+    #[arg(long)]
+    pub hprt_occlusion: Option<lightlab_bake::hprt::Occlusion>,
+    /// Run-time sampler directions per filter (default 1024).
+    #[arg(long)]
+    pub hprt_samples: Option<usize>,
+    /// Recompute every filter every frame (no dirty flags).
+    #[arg(long)]
+    pub hprt_no_cache: bool,
+    /// Black occluders, as the thesis's: what blocks a filter's rays reflects nothing (by
+    /// default a blocked ray sees the occluder's diffuse radiance, from its own filtered light).
+    #[arg(long)]
+    pub hprt_black_occluders: bool,
+}
+
+/// How `prt-hierarchical` builds its tree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum HprtTree {
+    #[default]
+    Names,
+    Flat,
+    Proximity,
+}
+lightlab_core::named_enum!(HprtTree, "hierarchy", {
+    Names => "names", Flat => "flat", Proximity => "proximity",
+});
+
+impl HprtArgs {
+    /// The settings at `bands` bands with the light's `window`.
+    pub fn settings(
+        &self,
+        bands: usize,
+        window: Window,
+    ) -> Result<lightlab_bake::hprt::HprtSettings> {
+        let d = lightlab_bake::hprt::HprtSettings::default();
+        let samples = self.hprt_samples.unwrap_or(d.samples);
+        anyhow::ensure!(
+            (16..=1 << 20).contains(&samples),
+            "--hprt-samples must be 16 to 1048576, not {samples}"
+        );
+        Ok(lightlab_bake::hprt::HprtSettings {
+            bands,
+            samples,
+            combine: self.hprt_combine.unwrap_or(d.combine),
+            filters: self.hprt_filters.unwrap_or(d.filters),
+            scope: self.hprt_scope.unwrap_or(d.scope),
+            occlusion: self.hprt_occlusion.unwrap_or(d.occlusion),
+            cache: !self.hprt_no_cache,
+            bounce: !self.hprt_black_occluders,
+            window,
+            seed: d.seed,
+        })
+    }
+
+    /// The tree over `scene`'s instances.
+    pub fn tree(&self, scene: &lightlab_scene::Scene) -> lightlab_bake::hprt::Tree {
+        use lightlab_bake::hprt::Tree;
+        match self.hprt_tree {
+            HprtTree::Names => Tree::from_names(scene.instances.iter().map(|i| i.name.as_str())),
+            HprtTree::Flat => Tree::flat(scene.instances.len()),
+            HprtTree::Proximity => {
+                let empty = (glam::Vec3::ZERO, glam::Vec3::ZERO);
+                let b: Vec<_> = (0..scene.instances.len())
+                    .map(|i| scene.instance_bounds(i).unwrap_or(empty))
+                    .collect();
+                let size = scene.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length());
+                Tree::by_proximity(&b, 0.05 * size)
+            }
         }
     }
 }

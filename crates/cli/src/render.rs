@@ -133,7 +133,16 @@ pub fn run(a: RenderArgs) -> Result<()> {
     crate::options::apply_brdf(&mut scene, a.gpu.raster.brdf);
     a.technique.check_options(&a.gpu, a.indirect_only)?;
     if a.technique.family() != Family::PathTraced {
+        // The GPU techniques pose the scene themselves (the SH ones after baking its rest).
         return run_raster(&a, &scene);
+    }
+    if let Some(k) = a.gpu.frame {
+        anyhow::ensure!(
+            scene.animation.is_some(),
+            "--frame poses an animated scene, and {} has no animation",
+            scene.name
+        );
+        scene.pose(k);
     }
     let (min_depth, max_depth) = depth_range(&a)?;
     let settings = RenderSettings {

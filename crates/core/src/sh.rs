@@ -434,14 +434,17 @@ impl Rotation {
 
 // ---- products --------------------------------------------------------------------------------
 
-/// The SH triple-product (Clebsch–Gordan / Gaunt) tensor Γᵢⱼₖ = ∫ YᵢYⱼYₖ dω, stored sparsely
-/// (only non-zero entries with i ≤ j ≤ k; selection rules skip the rest). Computed with a Gauss
-/// set exact for degree 3(L−1).
+/// The SH triple-product (Clebsch–Gordan / Gaunt) tensor Γᵢⱼₖ = ∫ YᵢYⱼYₖ dω, stored sparsely.
+/// Computed with a Gauss set exact for degree 3(L−1); selection rules skip the triples that
+/// vanish (odd l-sum, triangle inequality) before integrating.
 #[derive(Clone, Debug)]
 pub struct TripleProduct {
     pub bands: usize,
-    /// (i, j, k, Γ) with i ≤ j ≤ k.
+    /// (i, j, k, Γ) with i ≤ j ≤ k (238 at 5 bands).
     pub entries: Vec<(u16, u16, u16, f64)>,
+    /// Every ordered (i, j, k) with Γᵢⱼₖ ≠ 0: the permutations of `entries` (1 158 at 5
+    /// bands, McKenzie §5.1.7's sparse table), what the products loop over.
+    pub ordered: Vec<(u16, u16, u16, f64)>,
 }
 
 impl TripleProduct {
@@ -469,15 +472,8 @@ impl TripleProduct {
                 }
             }
         }
-        TripleProduct { bands, entries }
-    }
-
-    /// Coefficients of the projected product of `a` and `b` (both `bands²` long).
-    pub fn product(&self, a: &[f64], b: &[f64]) -> Vec<f64> {
-        let mut c = vec![0.0; num_coeffs(self.bands)];
-        for &(i, j, k, g) in &self.entries {
-            let (i, j, k) = (i as usize, j as usize, k as usize);
-            // All distinct permutations of (i, j, k) contribute c_x += Γ·a_y·b_z.
+        let mut ordered = vec![];
+        for &(i, j, k, g) in &entries {
             let mut perms = [
                 (i, j, k),
                 (i, k, j),
@@ -485,28 +481,54 @@ impl TripleProduct {
                 (j, k, i),
                 (k, i, j),
                 (k, j, i),
-            ]
-            .to_vec();
+            ];
             perms.sort_unstable();
-            perms.dedup();
-            for (x, y, z) in perms {
-                c[x] += g * a[y] * b[z];
+            for (p, q) in perms.iter().enumerate() {
+                if p == 0 || perms[p - 1] != *q {
+                    ordered.push((q.0, q.1, q.2, g));
+                }
             }
         }
+        TripleProduct {
+            bands,
+            entries,
+            ordered,
+        }
+    }
+
+    /// Coefficients of the projected product of `a` and `b` (both `bands²` long).
+    pub fn product<T>(&self, a: &[f64], b: &[T]) -> Vec<T>
+    where
+        T: Copy + Default + std::ops::Mul<f64, Output = T> + std::ops::AddAssign,
+    {
+        let mut c = vec![T::default(); num_coeffs(self.bands)];
+        for &(i, j, k, g) in &self.ordered {
+            c[k as usize] += b[j as usize] * (g * a[i as usize]);
+        }
         c
+    }
+
+    /// McKenzie's "SH product masking" (§5.1.7): the product of the Hann-windowed (or any
+    /// `window`) operands, Cₖ = Σ Γᵢⱼₖ·w(lᵢ)aᵢ·w(lⱼ)bⱼ. Windowing both sides takes the power
+    /// of sudden, negative occlusion data in the high bands over the low output bands. With
+    /// the unit filter as `a` (DC √4π), the result is `b` windowed.
+    pub fn masked_product<T>(&self, a: &[f64], b: &[T], window: Window) -> Vec<T>
+    where
+        T: Copy + Default + std::ops::Mul<f64, Output = T> + std::ops::AddAssign,
+    {
+        let mut aw = a.to_vec();
+        let mut bw = b.to_vec();
+        window.apply(&mut aw);
+        window.apply(&mut bw);
+        self.product(&aw, &bw)
     }
 
     /// The product matrix M(a) with M(a)·b = product(a, b) (row-major, bands² × bands²).
     pub fn matrix(&self, a: &[f64]) -> Vec<f64> {
         let n = num_coeffs(self.bands);
         let mut m = vec![0.0; n * n];
-        let mut e = vec![0.0; n];
-        for col in 0..n {
-            e.iter_mut().for_each(|v| *v = 0.0);
-            e[col] = 1.0;
-            for (row, v) in self.product(a, &e).into_iter().enumerate() {
-                m[row * n + col] = v;
-            }
+        for &(i, j, k, g) in &self.ordered {
+            m[k as usize * n + j as usize] += g * a[i as usize];
         }
         m
     }

@@ -432,3 +432,49 @@ fn phong_lobe_zonal_coefficients() {
         assert!((a - approx).abs() < 0.03, "l={l}: {a} vs {approx}");
     }
 }
+
+/// McKenzie §5.1.7's sparse table: the non-zero Γᵢⱼₖ over ordered triples per band count.
+#[test]
+fn triple_product_nonzero_counts() {
+    for (bands, count) in [(2, 10), (3, 83), (4, 353), (5, 1158), (6, 2907)] {
+        let tp = TripleProduct::new(bands);
+        assert_eq!(tp.ordered.len(), count, "{bands} bands");
+    }
+    // 238 distinct i ≤ j ≤ k triples at 5 bands, the smallest |Γ| ≈ 0.02564.
+    let tp = TripleProduct::new(5);
+    assert_eq!(tp.entries.len(), 238);
+    let smallest = tp.entries.iter().map(|e| e.3.abs()).fold(1.0, f64::min);
+    assert!((smallest - 0.02564).abs() < 1e-4, "{smallest}");
+}
+
+/// The unit filter (McKenzie §5.1.5): the basis summed over a jittered 100 × 100 sampler with
+/// weight 4π/n is √(4π) in the DC term and ≈ 0 elsewhere; masking a light with it is the
+/// light Hann-windowed.
+#[test]
+fn unit_filter_and_masking_without_occluders() {
+    let bands = 5;
+    let set = DirectionSet::stratified(100 * 100, 7);
+    let unit = sh::project(bands, &set, |_| 1.0);
+    assert!((unit[0] - (4.0 * PI).sqrt()).abs() < 1e-3, "{}", unit[0]);
+    let worst = unit[1..].iter().map(|v| v.abs()).fold(0.0, f64::max);
+    assert!(worst < 6e-3, "{worst}");
+    let tp = TripleProduct::new(bands);
+    let mut rng = Rng::new(9, 0);
+    let light: Vec<DVec3> = (0..num_coeffs(bands))
+        .map(|_| DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5)
+        .collect();
+    let mut exact_unit = vec![0.0; num_coeffs(bands)];
+    exact_unit[0] = (4.0 * PI).sqrt();
+    let window = Window::Hann { size: 5.0 };
+    let masked = tp.masked_product(&exact_unit, &light, window);
+    let mut expected = light.clone();
+    window.apply(&mut expected);
+    for (m, e) in masked.iter().zip(&expected) {
+        assert!((*m - *e).length() < 1e-12, "{m} vs {e}");
+    }
+    // The plain product with the unit filter is the identity.
+    let plain = tp.product(&exact_unit, &light);
+    for (p, l) in plain.iter().zip(&light) {
+        assert!((*p - *l).length() < 1e-12);
+    }
+}

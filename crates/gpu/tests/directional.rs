@@ -81,6 +81,7 @@ fn ridged_floor(tilt: f32) -> Scene {
         )],
         environment: None,
         warnings: vec![],
+        animation: None,
     }
 }
 

@@ -6,6 +6,7 @@
 //! `load("cornell")` gives a built-in scene; `load("path/file.glb")` loads a glTF file.
 #![forbid(unsafe_code)]
 
+pub mod animation;
 pub mod builtin;
 pub mod emitters;
 pub mod fingerprint;
@@ -15,6 +16,7 @@ pub mod model;
 pub mod simplify;
 pub mod validate;
 
+pub use animation::{Animation, Track};
 pub use model::*;
 
 use std::path::{Path, PathBuf};

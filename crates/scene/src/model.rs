@@ -23,6 +23,8 @@ pub struct Scene {
     /// What loading dropped or changed, one line each (degenerate triangles dropped, primitives
     /// skipped, …); the command line prints them as warnings.
     pub warnings: Vec<String>,
+    /// Rigid motion of some instances over time (`--frame K` poses it); None for still scenes.
+    pub animation: Option<crate::Animation>,
 }
 
 /// An indexed triangle mesh with one material (a glTF primitive).

@@ -15,7 +15,6 @@ use crate::technique::{Family, Technique};
 use anyhow::{Result, bail};
 use lightlab_bake::Lightmaps;
 use lightlab_bake::prt::VertexTransfer;
-use lightlab_bake::sh_light::ShProjector;
 use lightlab_core::image::Image;
 use lightlab_gpu::GpuContext;
 use lightlab_gpu::raster::{FrameTimes, Renderer};
@@ -24,7 +23,9 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 /// What to build: a technique on a scene with its options, at `width`×`height` (before
-/// supersampling) from scene camera `camera`.
+/// supersampling) from scene camera `camera`. An animated scene comes in its rest pose;
+/// `args.frame` poses it.
+#[derive(Clone, Copy)]
 pub struct Request<'a> {
     pub scene: &'a Scene,
     pub technique: Technique,
@@ -54,8 +55,10 @@ impl Bakes {
 pub struct TechniqueRenderer {
     pub technique: Technique,
     pub renderer: Renderer,
-    /// SH techniques: the projector of the scene's lights and the scene it projects.
-    sh_light: Option<(ShProjector, Scene)>,
+    /// SH techniques: what relights them each frame.
+    sh_light: Option<sh::ShState>,
+    /// An animated scene in its rest pose (what [`TechniqueRenderer::pose`] poses).
+    rest: Option<Scene>,
     debug_view: DebugView,
     ssaa: u32,
     /// The camera lens's views, in steps (None: the pinhole), and the film they make.
@@ -66,6 +69,26 @@ pub struct TechniqueRenderer {
 /// Build the renderer of a GPU technique.
 pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<TechniqueRenderer> {
     req.technique.check_options(req.args, false)?;
+    let frame = req.args.frame;
+    if frame.is_some() && req.scene.animation.is_none() {
+        bail!(
+            "--frame poses an animated scene, and {} has no animation",
+            req.scene.name
+        );
+    }
+    // The SH techniques bake the rest pose and move the objects; the others are built on
+    // the posed scene (their shadow maps and bakes fitted to it).
+    let posed;
+    let req = &match frame {
+        Some(k) if req.technique.family() != Family::Sh => {
+            posed = req.scene.posed(k);
+            Request {
+                scene: &posed,
+                ..*req
+            }
+        }
+        _ => *req,
+    };
     let mut sh_light = None;
     let renderer = match req.technique.family() {
         Family::PathTraced => bail!("'{}' is not a GPU technique", req.technique),
@@ -81,35 +104,71 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
         }
         Family::Sh => {
             let data = sh::data(req, bakes)?;
-            let (r, projector) = sh::renderer(ctx, req, &data)?;
-            sh_light = Some((projector, data.scene().clone()));
+            let (r, state) = sh::renderer(ctx, req, &data)?;
+            sh_light = Some(state);
             r
         }
         Family::Lpv => lpv::renderer(ctx, req)?,
         Family::Debug => normals::renderer(ctx, req)?,
     };
-    Ok(TechniqueRenderer {
+    let mut tr = TechniqueRenderer {
         technique: req.technique,
         renderer,
+        // The scene the renderer was made from (an SH bake's has its light-map coordinates).
+        rest: req.scene.animation.as_ref().map(|_| match &sh_light {
+            Some(state) => state.rest.clone(),
+            None => req.scene.clone(),
+        }),
         sh_light,
         debug_view: req.args.lpv.debug_view,
         ssaa: req.args.raster.ssaa,
         lens: lens::lens_steps(req)?,
         film: None,
-    })
+    };
+    if let (Some(k), Some(_)) = (frame, &tr.sh_light) {
+        tr.pose(ctx, k)?;
+    }
+    Ok(tr)
 }
 
 impl TechniqueRenderer {
     /// The CPU work of a frame before it is drawn: SH techniques re-project the scene's lights.
     /// Returns its time in milliseconds, None for techniques without such work.
     pub fn update(&mut self, ctx: &GpuContext) -> Result<Option<f64>> {
-        let Some((projector, scene)) = &self.sh_light else {
+        let Some(state) = &mut self.sh_light else {
             return Ok(None);
         };
         let t0 = Instant::now();
-        let light = projector.project(scene, None);
+        let light = state.light();
         sh::set_light(ctx, &mut self.renderer, &light)?;
         Ok(Some(t0.elapsed().as_secs_f64() * 1e3))
+    }
+
+    /// Pose an animated scene at frame `k`: its moving instances move (baked data moves with
+    /// them) and the SH techniques relight. Nothing for a still scene.
+    pub fn pose(&mut self, ctx: &GpuContext, k: u32) -> Result<()> {
+        let Some(rest) = &self.rest else {
+            return Ok(());
+        };
+        let posed = rest.posed(k);
+        let moving: Vec<usize> = rest
+            .animation
+            .iter()
+            .flat_map(|a| a.tracks.iter().map(|t| t.instance))
+            .collect();
+        for &i in &moving {
+            self.renderer.move_instance(ctx, &posed, i);
+        }
+        if let Some(state) = &mut self.sh_light {
+            state.posed = posed;
+            self.update(ctx)?;
+        }
+        Ok(())
+    }
+
+    /// Hierarchical PRT's counters of the last frame (None for other techniques).
+    pub fn hprt_stats(&self) -> Option<lightlab_bake::hprt::FilterStats> {
+        Some(self.sh_light.as_ref()?.hierarchy.as_ref()?.stats)
     }
 
     /// Render two frames (the first compiles pipelines and uploads) and return the second's

@@ -1,4 +1,5 @@
-//! The SH techniques: `prt-vertex` and `prt-textured` (McKenzie Chapter ch. 4), `shl`,
+//! The SH techniques: `prt-vertex` and `prt-textured` (McKenzie Chapter ch. 4),
+//! `prt-hierarchical` (ch. 5: textured PRT's light filtered by the other objects), `shl`,
 //! `shl-compressed` and `shl-normalmapped` (Fuchs §5): transfer read from `--baked` or baked
 //! now, the scene's lights projected on SH (re-projected every frame by the caller), and the
 //! GPU renderer whose ambient term is transfer · light.
@@ -6,9 +7,12 @@
 use super::{Bakes, Request};
 use crate::technique::Technique;
 use anyhow::{Result, bail};
+use glam::DMat3;
+use lightlab_bake::hprt::Hierarchy;
 use lightlab_bake::prt::{ShLightmaps, VertexTransfer, bake_sh_lightmaps, vertex_transfer};
 use lightlab_bake::sh_compress::{CompressSettings, CompressedSh, compress};
 use lightlab_bake::sh_light::{SamplePoints, ShLighting, ShProjector};
+use lightlab_core::sh::Window;
 use lightlab_gpu::GpuContext;
 use lightlab_gpu::prt::{IndexPage, ShFilter, ShInput, ShTransfer};
 use lightlab_gpu::raster::{EnvDiffuse, Renderer};
@@ -138,12 +142,72 @@ pub fn set_light(ctx: &GpuContext, r: &mut Renderer, light: &ShLighting) -> Resu
     Ok(())
 }
 
-/// The GPU renderer of an SH technique lit by the scene's lights of now, and the projector
-/// that re-projects them each frame.
-pub fn renderer(ctx: &GpuContext, req: &Request, data: &ShData) -> Result<(Renderer, ShProjector)> {
+/// An SH technique's per-frame light: the projector, the scene as baked (its rest pose) and
+/// as posed now, and hierarchical PRT's filters.
+pub struct ShState {
+    projector: ShProjector,
+    pub rest: Scene,
+    pub posed: Scene,
+    pub hierarchy: Option<Hierarchy>,
+}
+
+impl ShState {
+    /// This frame's light: projected at the posed scene's sample points, filtered (hierarchical
+    /// PRT), and turned into each moved object's baked frame.
+    pub fn light(&mut self) -> ShLighting {
+        let rotations = self
+            .rest
+            .animation
+            .as_ref()
+            .map(|_| rotations(&self.rest, &self.posed));
+        match &mut self.hierarchy {
+            None => self.projector.project(&self.posed, rotations.as_deref()),
+            Some(h) => {
+                h.update(&self.posed);
+                let world = self.projector.project(&self.posed, None);
+                h.relight(&world, rotations.as_deref())
+            }
+        }
+    }
+}
+
+/// Each instance's rotation from its rest transform to its posed one.
+pub fn rotations(rest: &Scene, posed: &Scene) -> Vec<DMat3> {
+    rest.instances
+        .iter()
+        .zip(&posed.instances)
+        .map(|(a, b)| {
+            let (_, ra, _) = a.transform.to_scale_rotation_translation();
+            let (_, rb, _) = b.transform.to_scale_rotation_translation();
+            DMat3::from_quat((rb * ra.inverse()).normalize().as_dquat())
+        })
+        .collect()
+}
+
+/// The GPU renderer of an SH technique lit by the scene's lights of now, and the state that
+/// relights it each frame.
+pub fn renderer(ctx: &GpuContext, req: &Request, data: &ShData) -> Result<(Renderer, ShState)> {
     let bands = data.bands();
-    let prt = matches!(req.technique, Technique::PrtVertex | Technique::PrtTextured);
-    let ls = req.args.sh.light_settings(prt, bands)?;
+    let hierarchical = req.technique == Technique::PrtHierarchical;
+    let prt = matches!(
+        req.technique,
+        Technique::PrtVertex | Technique::PrtTextured | Technique::PrtHierarchical
+    );
+    let mut ls = req.args.sh.light_settings(prt, bands)?;
+    let hierarchy = if hierarchical {
+        anyhow::ensure!(
+            ls.points == SamplePoints::PerObject,
+            "prt-hierarchical filters the light at each object's sample points: it needs \
+             --sh-points object"
+        );
+        let hs = req.args.sh.hprt.settings(bands, ls.window)?;
+        // The hierarchy windows the light as it combines it with the filters.
+        ls.window = Window::None;
+        let tree = req.args.sh.hprt.tree(data.scene());
+        Some(Hierarchy::new(data.scene(), tree, hs))
+    } else {
+        None
+    };
     let a = &req.args.raster;
     let mut s = a.settings(
         req.technique.shadows(a.shadow_variant)?,
@@ -157,8 +221,13 @@ pub fn renderer(ctx: &GpuContext, req: &Request, data: &ShData) -> Result<(Rende
     s.env_diffuse = EnvDiffuse::Sh;
     // The lights reach the surfaces through the transfer only.
     let mut scene = data.scene().clone();
-    let projector = ShProjector::new(&scene, &ls);
-    let light = projector.project(&scene, None);
+    let mut state = ShState {
+        projector: ShProjector::new(&scene, &ls),
+        rest: scene.clone(),
+        posed: scene.clone(),
+        hierarchy,
+    };
+    let light = state.light();
     scene.lights.clear();
     let filter = req.args.sh.sh_filter.unwrap_or(ShFilter::Bilinear);
     let index_pages: Vec<IndexPage>;
@@ -202,5 +271,5 @@ pub fn renderer(ctx: &GpuContext, req: &Request, data: &ShData) -> Result<(Rende
     };
     let mut r = Renderer::with_sh(ctx, &scene, s, &input)?;
     set_light(ctx, &mut r, &light)?;
-    Ok((r, projector))
+    Ok((r, state))
 }

@@ -9,7 +9,9 @@
 //! | `prt` | a ridged torus knot (≈86k triangles, deep self-occlusion) and a coarse copy, env-lit |
 //! | `spheres` | spheres and a torus of different materials under an environment map |
 //! | `atrium` | a two-storey colonnade around a sunlit courtyard, with coloured banners |
+//! | `prt-dynamic` | three objects moving near each other over a tiled ground (animated) |
 
+mod dynamic;
 pub mod geom;
 
 use crate::model::*;
@@ -19,8 +21,15 @@ use lightlab_core::image::Image;
 use lightlab_core::sampling::{Rng, uniform_sphere};
 
 /// Names of the built-in scenes, in the order `lightlab scenes` lists them.
-pub const NAMES: [&str; 7] = [
-    "cornell", "room", "shadows", "bush", "prt", "spheres", "atrium",
+pub const NAMES: [&str; 8] = [
+    "cornell",
+    "room",
+    "shadows",
+    "bush",
+    "prt",
+    "spheres",
+    "atrium",
+    "prt-dynamic",
 ];
 
 /// One-line description of a built-in scene.
@@ -34,6 +43,9 @@ pub fn describe(name: &str) -> Option<&'static str> {
         "spheres" => "spheres and a torus with different materials under an environment map",
         "atrium" => {
             "two-storey colonnade around a sunlit courtyard, coloured banners (Sponza-like)"
+        }
+        "prt-dynamic" => {
+            "a sphere, a ball and a ring moving near each other over tiled ground (48 frames)"
         }
         _ => return None,
     })
@@ -49,6 +61,7 @@ pub fn builtin(name: &str) -> Option<Scene> {
         "prt" => prt(),
         "spheres" => spheres(),
         "atrium" => atrium(),
+        "prt-dynamic" => dynamic::prt_dynamic(),
         _ => return None,
     };
     s.name = name.into();
