@@ -16,7 +16,7 @@ pub mod folder;
 pub mod gather;
 pub mod hprt;
 pub mod layout;
-mod occlusion_groups;
+pub mod occlusion_groups;
 pub mod output;
 pub mod prt;
 pub mod radiosity;

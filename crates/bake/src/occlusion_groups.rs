@@ -26,7 +26,7 @@ pub(crate) struct Groups {
 
 /// The group of each instance: 0 for the still ones, 1, 2, … for each moving one; None
 /// for a scene without an animation (one group: everything occludes everything).
-pub(crate) fn assign(scene: &Scene) -> Option<Vec<usize>> {
+pub fn assign(scene: &Scene) -> Option<Vec<usize>> {
     let a = scene.animation.as_ref()?;
     let mut next = 1;
     Some(
@@ -78,6 +78,41 @@ pub(crate) fn build(
         });
     }
     Ok(Groups { of_instance, parts })
+}
+
+/// Per-vertex transfer of `scene`, each moving object of an animated scene against its own
+/// geometry only (the still scene: [`crate::prt::vertex_transfer`] as it is).
+pub fn vertex_transfer(
+    scene: &Scene,
+    s: &TransferSettings,
+) -> Result<VertexTransfer, crate::prt::TransferError> {
+    let Some(of_instance) = assign(scene) else {
+        return Ok(crate::prt::vertex_transfer(scene, &Accel::new(scene), s)?.0);
+    };
+    let mut out = VertexTransfer {
+        bands: s.bands,
+        instances: vec![vec![]; scene.instances.len()],
+    };
+    let count = of_instance.iter().max().map_or(0, |m| m + 1);
+    for g in 0..count {
+        let members: Vec<usize> = (0..scene.instances.len())
+            .filter(|&i| of_instance[i] == g)
+            .collect();
+        if members.is_empty() {
+            continue;
+        }
+        let mut part = scene.clone();
+        part.animation = None;
+        part.instances = members
+            .iter()
+            .map(|&i| scene.instances[i].clone())
+            .collect();
+        let vt = crate::prt::vertex_transfer(&part, &Accel::new(&part), s)?.0;
+        for (i, t) in members.into_iter().zip(vt.instances) {
+            out.instances[i] = t;
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

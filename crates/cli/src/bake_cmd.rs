@@ -50,14 +50,21 @@ pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool)
         return bake_vertex(scene, out, args, json);
     }
     if method == "prt-hierarchical" {
+        bail!(
+            "prt-hierarchical is not a bake: its filters are found every frame as objects move. \
+             Its data are textured PRT's: bake them with `--method sh` (each moving object of an \
+             animated scene gets transfer of its own) and render with `--technique \
+             prt-hierarchical --baked DIR`"
+        );
+    }
+    if method == "light-field" {
         return Err(crate::not_implemented(
-            "bake method 'prt-hierarchical' (McKenzie Chapter ch. 5's scene-tree filters)",
+            "bake method 'light-field' (Heidrich ch. 7's light slabs of a luminaire)",
         ));
     }
     let Some(m) = Method::parse(method) else {
         bail!(
-            "unknown bake method '{method}' (known: {}, sh, prt-textured, shl, prt, \
-             prt-hierarchical)",
+            "unknown bake method '{method}' (known: {}, sh, prt-textured, shl, prt)",
             Method::NAMES.join(", ")
         );
     };
@@ -104,7 +111,7 @@ pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool)
 /// `lightlab bake --method prt`: per-vertex transfer (Sloan et al. 2002), one binary file per
 /// instance and a manifest; `render --technique prt-vertex --baked DIR` reads it.
 fn bake_vertex(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
-    use lightlab_bake::prt::vertex_transfer;
+    use lightlab_bake::occlusion_groups::vertex_transfer;
     use lightlab_bake::sh_folder::write_vertex_transfer;
     let s = args.transfer_settings()?;
     eprintln!(
@@ -112,8 +119,7 @@ fn bake_vertex(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result
         scene.name, s.bands, s.kind, s.samples
     );
     let t = std::time::Instant::now();
-    let accel = lightlab_trace::Accel::new(scene);
-    let (vt, _) = vertex_transfer(scene, &accel, &s)?;
+    let vt = vertex_transfer(scene, &s)?;
     let seconds = t.elapsed().as_secs_f64();
     let m = write_vertex_transfer(&vt, scene, &s, out, &scene.name, seconds)?;
     let vertices: usize = m.instances.iter().map(|f| f.vertices).sum();

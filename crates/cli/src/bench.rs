@@ -566,7 +566,7 @@ fn bench_frame(
         if let Some(ms) = tr.update(&ctx)? {
             m.sh_light.push(ms);
         }
-        if let Some(st) = tr.hprt_stats() {
+        if let Some(st) = tr.frames.hprt_stats() {
             m.hprt_nodes.push(st.nodes as f64);
         }
         let t = tr.renderer.render(&ctx);

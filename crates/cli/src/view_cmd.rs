@@ -107,7 +107,13 @@ pub fn view(a: &ViewArgs) -> Result<()> {
                 };
                 let mut tr = build(ctx, &req, &mut bakes)?;
                 tr.update(ctx)?;
-                Ok((tr.renderer, tr.lens))
+                let animation: Option<Box<dyn lightlab_viewer::Animation>> = if tr.frames.animated()
+                {
+                    Some(Box::new(tr.frames))
+                } else {
+                    None
+                };
+                Ok((tr.renderer, tr.lens, animation))
             };
             go().map_err(|e| format!("{e:#}").into())
         },

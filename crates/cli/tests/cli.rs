@@ -214,9 +214,13 @@ fn compare_rejects_different_sizes_and_unreadable_files() {
 
 #[test]
 fn unbuilt_methods_exit_with_code_2() {
-    let o = lightlab(&["bake", "--scene", "cornell", "--method", "prt-hierarchical"]);
+    let o = lightlab(&["bake", "--scene", "cornell", "--method", "light-field"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("not implemented yet"), "{}", stderr(&o));
+    // Hierarchical PRT is a technique, not a bake: the error says what to do instead.
+    let o = lightlab(&["bake", "--scene", "cornell", "--method", "prt-hierarchical"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--method sh"), "{}", stderr(&o));
     // A mistyped option or a malformed value is an ordinary error (1), not "not implemented".
     for args in [
         vec!["render", "--scene", "cornell", "--no-such-option"],

@@ -47,8 +47,17 @@ pub type MakeRenderer<'a> =
 /// A camera lens's views, in the steps the viewer renders one per frame.
 pub type LensSteps = Vec<Vec<lightlab_gpu::lens_morph::LensView>>;
 
-/// What [`MakeRenderer`] makes: the renderer and the lens's views (None: a pinhole).
-pub type Made = (Renderer, Option<LensSteps>);
+/// What [`MakeRenderer`] makes: the renderer, the lens's views (None: a pinhole) and, for an
+/// animated scene, what poses its frames.
+pub type Made = (Renderer, Option<LensSteps>, Option<Box<dyn Animation>>);
+
+/// Plays an animated scene in a technique's renderer.
+pub trait Animation {
+    /// Frames per second, and frames in one loop.
+    fn rate(&self) -> (f32, u32);
+    /// Pose frame `frame`: the moving objects, and whatever the technique relights for them.
+    fn pose(&mut self, ctx: &GpuContext, r: &mut Renderer, frame: u32) -> Result<(), MakeError>;
+}
 
 /// Why a technique's renderer could not be built (shown in the panel).
 pub type MakeError = Box<dyn std::error::Error + Send + Sync>;
@@ -121,7 +130,12 @@ pub fn run(config: ViewerConfig, make: MakeRenderer<'_>) -> Result<ViewerStats, 
     let home = OrbitCamera::for_scene(cam, config.scene.bounds());
     let event_loop = EventLoop::new().map_err(|e| ViewerError::Window(e.to_string()))?;
     event_loop.set_control_flow(ControlFlow::Poll);
-    let (motion, animate) = (motion::Motion::new(&config.scene), config.animate);
+    // An animated scene plays its own animation instead of circling its mirrors.
+    let motion = match config.scene.animation {
+        Some(_) => None,
+        None => motion::Motion::new(&config.scene),
+    };
+    let animate = config.animate;
     let mut app = App {
         technique: config
             .technique
@@ -176,7 +190,13 @@ struct Choices {
 }
 
 /// The panel's header, technique, exposure, tone, motion and buttons.
-fn panel(ui: &mut egui::Ui, techniques: &[String], header: &str, c: &mut Choices, motion: bool) {
+fn panel(
+    ui: &mut egui::Ui,
+    techniques: &[String],
+    header: &str,
+    c: &mut Choices,
+    motion: Option<&str>,
+) {
     ui.label(header);
     egui::ComboBox::from_label("technique")
         .selected_text(&techniques[c.technique])
@@ -195,8 +215,8 @@ fn panel(ui: &mut egui::Ui, techniques: &[String], header: &str, c: &mut Choices
         ui.selectable_value(&mut c.tone, ToneMap::Reinhard, "Reinhard");
         ui.selectable_value(&mut c.tone, ToneMap::Clamp, "clamp");
     });
-    if motion {
-        ui.checkbox(&mut c.animate, "move the mirror-like objects (M)");
+    if let Some(label) = motion {
+        ui.checkbox(&mut c.animate, label);
     }
     ui.horizontal(|ui| {
         c.reset = ui.button("reset camera (R)").clicked();
@@ -235,6 +255,8 @@ struct Gfx {
     renderer: Option<Renderer>,
     /// The camera lens's film, when the camera has a lens.
     lens: Option<lens::LensState>,
+    /// An animated scene's player and the frame it last posed.
+    animation: Option<(Box<dyn Animation>, Option<u32>)>,
     pending: egui::TexturesDelta,
 }
 
@@ -344,6 +366,7 @@ impl App<'_> {
             egui_renderer,
             renderer: None,
             lens: None,
+            animation: None,
             pending: Default::default(),
         })
     }
@@ -384,9 +407,10 @@ impl App<'_> {
             self.rebuild = false;
             let name = self.cfg.techniques[self.technique].clone();
             match (self.make)(&gfx.ctx, &name, w, h) {
-                Ok((r, steps)) => {
+                Ok((r, steps, animation)) => {
                     let (rw, rh) = r.size();
                     gfx.lens = steps.map(|s| lens::LensState::new(&gfx.ctx, s, rw, rh));
+                    gfx.animation = animation.map(|a| (a, None));
                     gfx.renderer = Some(r);
                     self.message = None;
                 }
@@ -407,13 +431,26 @@ impl App<'_> {
         if self.animate {
             self.clock += dt;
         }
-        motion::pose(&mut self.motion, self.clock, &gfx.ctx, renderer);
+        match gfx.animation.as_mut() {
+            // An animated scene plays its own animation (from frame 0 until M starts it).
+            Some((player, last)) => {
+                let (fps, frames) = player.rate();
+                let k = (self.clock * fps) as u32 % frames.max(1);
+                if *last != Some(k) {
+                    *last = Some(k);
+                    if let Err(e) = player.pose(&gfx.ctx, renderer, k) {
+                        self.message = Some(format!("frame {k}: {e}"));
+                    }
+                }
+            }
+            None => motion::pose(&mut self.motion, self.clock, &gfx.ctx, renderer),
+        }
         let camera = self.orbit.camera();
         let transform = camera.transform;
         renderer.set_camera(&gfx.ctx, camera);
         match gfx.lens.as_mut() {
             Some(l) => {
-                let moving = self.animate && self.motion.is_some();
+                let moving = self.animate && (self.motion.is_some() || gfx.animation.is_some());
                 if let Some(t) = l.step(&gfx.ctx, renderer, transform, moving) {
                     self.times = t;
                 }
@@ -447,7 +484,12 @@ impl App<'_> {
             egui::Window::new("lightlab")
                 .default_pos([10.0, 10.0])
                 .show(ctx, |ui| {
-                    panel(ui, &self.cfg.techniques, &header, &mut c, self.motion.is_some());
+                    let motion = match (&self.motion, &gfx.animation) {
+                        (_, Some(_)) => Some("play the scene's animation (M)"),
+                        (Some(_), None) => Some("move the mirror-like objects (M)"),
+                        (None, None) => None,
+                    };
+                    panel(ui, &self.cfg.techniques, &header, &mut c, motion);
                     ui.separator();
                     timings(ui, self.frame_ms, &self.times, self.message.as_ref());
                     ui.separator();

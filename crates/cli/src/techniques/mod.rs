@@ -55,10 +55,8 @@ impl Bakes {
 pub struct TechniqueRenderer {
     pub technique: Technique,
     pub renderer: Renderer,
-    /// SH techniques: what relights them each frame.
-    sh_light: Option<sh::ShState>,
-    /// An animated scene in its rest pose (what [`TechniqueRenderer::pose`] poses).
-    rest: Option<Scene>,
+    /// What changes from frame to frame: the SH light, an animated scene's pose.
+    pub frames: Frames,
     debug_view: DebugView,
     ssaa: u32,
     /// The camera lens's views, in steps (None: the pinhole), and the film they make.
@@ -78,6 +76,7 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
     }
     // The SH techniques bake the rest pose and move the objects; the others are built on
     // the posed scene (their shadow maps and bakes fitted to it).
+    let rest_scene = req.scene;
     let posed;
     let req = &match frame {
         Some(k) if req.technique.family() != Family::Sh => {
@@ -114,61 +113,102 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
     let mut tr = TechniqueRenderer {
         technique: req.technique,
         renderer,
-        // The scene the renderer was made from (an SH bake's has its light-map coordinates).
-        rest: req.scene.animation.as_ref().map(|_| match &sh_light {
-            Some(state) => state.rest.clone(),
-            None => req.scene.clone(),
-        }),
-        sh_light,
+        frames: Frames {
+            // The scene the renderer was made from (an SH bake's has its light-map coordinates).
+            rest: rest_scene.animation.as_ref().map(|_| match &sh_light {
+                Some(state) => state.rest.clone(),
+                None => rest_scene.clone(),
+            }),
+            sh: sh_light,
+            start: frame.unwrap_or(0),
+        },
         debug_view: req.args.lpv.debug_view,
         ssaa: req.args.raster.ssaa,
         lens: lens::lens_steps(req)?,
         film: None,
     };
-    if let (Some(k), Some(_)) = (frame, &tr.sh_light) {
+    if let (Some(k), Some(_)) = (frame, &tr.frames.sh) {
         tr.pose(ctx, k)?;
     }
     Ok(tr)
+}
+
+/// What a technique's renderer changes from frame to frame: the SH techniques' light
+/// (re-projected, filtered by hierarchical PRT) and an animated scene's pose.
+pub struct Frames {
+    /// An animated scene in its rest pose (what [`Frames::pose`] poses).
+    rest: Option<Scene>,
+    sh: Option<sh::ShState>,
+    /// The frame the renderer was made at (`--frame`): the viewer plays on from it.
+    start: u32,
+}
+
+impl Frames {
+    /// Relight an SH technique; its time in milliseconds (None for other techniques).
+    pub fn update(&mut self, ctx: &GpuContext, r: &mut Renderer) -> Result<Option<f64>> {
+        let Some(state) = &mut self.sh else {
+            return Ok(None);
+        };
+        let t0 = Instant::now();
+        let light = state.light();
+        sh::set_light(ctx, r, &light)?;
+        Ok(Some(t0.elapsed().as_secs_f64() * 1e3))
+    }
+
+    /// Pose an animated scene at frame `k`: its moving instances move (baked data moves with
+    /// them) and the SH techniques relight. Nothing for a still scene.
+    pub fn pose(&mut self, ctx: &GpuContext, r: &mut Renderer, k: u32) -> Result<()> {
+        let Some(rest) = &self.rest else {
+            return Ok(());
+        };
+        let posed = rest.posed(k);
+        for t in rest.animation.iter().flat_map(|a| &a.tracks) {
+            r.move_instance(ctx, &posed, t.instance);
+        }
+        if let Some(state) = &mut self.sh {
+            state.posed = posed;
+            self.update(ctx, r)?;
+        }
+        Ok(())
+    }
+
+    /// Whether the scene is animated.
+    pub fn animated(&self) -> bool {
+        self.rest.is_some()
+    }
+
+    /// Hierarchical PRT's counters of the last frame (None for other techniques).
+    pub fn hprt_stats(&self) -> Option<lightlab_bake::hprt::FilterStats> {
+        Some(self.sh.as_ref()?.hierarchy.as_ref()?.stats)
+    }
+}
+
+impl lightlab_viewer::Animation for Frames {
+    fn rate(&self) -> (f32, u32) {
+        let a = self.rest.as_ref().and_then(|s| s.animation.as_ref());
+        a.map_or((24.0, 1), |a| (a.fps, a.frames))
+    }
+
+    fn pose(
+        &mut self,
+        ctx: &GpuContext,
+        r: &mut Renderer,
+        frame: u32,
+    ) -> Result<(), lightlab_viewer::MakeError> {
+        Frames::pose(self, ctx, r, self.start + frame).map_err(|e| format!("{e:#}").into())
+    }
 }
 
 impl TechniqueRenderer {
     /// The CPU work of a frame before it is drawn: SH techniques re-project the scene's lights.
     /// Returns its time in milliseconds, None for techniques without such work.
     pub fn update(&mut self, ctx: &GpuContext) -> Result<Option<f64>> {
-        let Some(state) = &mut self.sh_light else {
-            return Ok(None);
-        };
-        let t0 = Instant::now();
-        let light = state.light();
-        sh::set_light(ctx, &mut self.renderer, &light)?;
-        Ok(Some(t0.elapsed().as_secs_f64() * 1e3))
+        self.frames.update(ctx, &mut self.renderer)
     }
 
-    /// Pose an animated scene at frame `k`: its moving instances move (baked data moves with
-    /// them) and the SH techniques relight. Nothing for a still scene.
+    /// Pose an animated scene at frame `k` ([`Frames::pose`]).
     pub fn pose(&mut self, ctx: &GpuContext, k: u32) -> Result<()> {
-        let Some(rest) = &self.rest else {
-            return Ok(());
-        };
-        let posed = rest.posed(k);
-        let moving: Vec<usize> = rest
-            .animation
-            .iter()
-            .flat_map(|a| a.tracks.iter().map(|t| t.instance))
-            .collect();
-        for &i in &moving {
-            self.renderer.move_instance(ctx, &posed, i);
-        }
-        if let Some(state) = &mut self.sh_light {
-            state.posed = posed;
-            self.update(ctx)?;
-        }
-        Ok(())
-    }
-
-    /// Hierarchical PRT's counters of the last frame (None for other techniques).
-    pub fn hprt_stats(&self) -> Option<lightlab_bake::hprt::FilterStats> {
-        Some(self.sh_light.as_ref()?.hierarchy.as_ref()?.stats)
+        self.frames.pose(ctx, &mut self.renderer, k)
     }
 
     /// Render two frames (the first compiles pipelines and uploads) and return the second's

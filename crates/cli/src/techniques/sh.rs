@@ -9,7 +9,7 @@ use crate::technique::Technique;
 use anyhow::{Result, bail};
 use glam::DMat3;
 use lightlab_bake::hprt::Hierarchy;
-use lightlab_bake::prt::{ShLightmaps, VertexTransfer, bake_sh_lightmaps, vertex_transfer};
+use lightlab_bake::prt::{ShLightmaps, VertexTransfer, bake_sh_lightmaps};
 use lightlab_bake::sh_compress::{CompressSettings, CompressedSh, compress};
 use lightlab_bake::sh_light::{SamplePoints, ShLighting, ShProjector};
 use lightlab_core::sh::Window;
@@ -63,8 +63,8 @@ pub fn data<'b>(req: &Request<'b>, bakes: &'b mut Bakes) -> Result<ShData<'b>> {
                         "computing {} per-vertex transfer ({} bands, {:?}, {} directions)",
                         scene.name, s.bands, s.kind, s.samples
                     );
-                    let accel = lightlab_trace::Accel::new(scene);
-                    vertex_transfer(scene, &accel, &s)?.0
+                    // Each moving object of an animated scene against itself only.
+                    lightlab_bake::occlusion_groups::vertex_transfer(scene, &s)?
                 }
             };
             bakes.vertex.insert(key.clone(), vt);
