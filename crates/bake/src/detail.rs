@@ -126,6 +126,7 @@ impl DetailProjector {
                         name: inst.name.clone(),
                         mesh: 0,
                         transform: inst.transform,
+                        nodes: vec![],
                     }],
                     materials: vec![Default::default()],
                     ..Default::default()

@@ -298,6 +298,7 @@ mod tests {
                 name: "i".into(),
                 mesh: 0,
                 transform: Mat4::IDENTITY,
+                nodes: vec![],
             }],
             lights,
             environment: None,

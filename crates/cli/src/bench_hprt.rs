@@ -205,7 +205,7 @@ fn frame_light(
     match settings {
         None => projector.project(posed, Some(&rot)),
         Some(hs) => {
-            let tree = Tree::from_names(rest.instances.iter().map(|i| i.name.as_str()));
+            let tree = Tree::from_scene(rest);
             let mut h = Hierarchy::new(rest, tree, hs);
             h.update(posed);
             h.relight(&projector.project(posed, None), Some(&rot))
@@ -242,7 +242,7 @@ fn filter_times(rest: &Scene, bands: usize) -> Result<serde_json::Value> {
                 cache,
                 ..Default::default()
             };
-            let tree = Tree::from_names(scene.instances.iter().map(|i| i.name.as_str()));
+            let tree = Tree::from_scene(&scene);
             let mut h = Hierarchy::new(&scene, tree, hs);
             h.update(&scene.posed(0));
             let (mut nodes, mut rays) = (0, 0);

@@ -835,10 +835,10 @@ impl Default for ShArgs {
 /// Options of `prt-hierarchical` (McKenzie Chapter ch. 5; docs/prt.md).
 #[derive(Args, Clone, Debug, Default)]
 pub struct HprtArgs {
-    /// The shadowing hierarchy: `names` (instance names as paths, `ground/tile_0_0` under a
-    /// composite `ground`; a flat tree when no name has a `/`), `flat` (one root over every
-    /// instance) or `proximity` (instances whose boxes lie within 5 % of the scene's size of
-    /// each other share a composite).
+    /// The shadowing hierarchy: `names` (the glTF node hierarchy, and instance names read as
+    /// paths: `ground/tile_0_0` under a composite `ground`; flat when there is neither),
+    /// `flat` (one root over every instance) or `proximity` (instances whose boxes lie within
+    /// 5 % of the scene's size of each other share a composite).
     #[arg(long, default_value = "names")]
     pub hprt_tree: HprtTree,
     /// How filter and light combine: `masked` (Hann-windowed triple product, McKenzie's
@@ -911,7 +911,7 @@ impl HprtArgs {
     pub fn tree(&self, scene: &lightlab_scene::Scene) -> lightlab_bake::hprt::Tree {
         use lightlab_bake::hprt::Tree;
         match self.hprt_tree {
-            HprtTree::Names => Tree::from_names(scene.instances.iter().map(|i| i.name.as_str())),
+            HprtTree::Names => Tree::from_scene(scene),
             HprtTree::Flat => Tree::flat(scene.instances.len()),
             HprtTree::Proximity => {
                 let empty = (glam::Vec3::ZERO, glam::Vec3::ZERO);

@@ -62,6 +62,7 @@ fn ridged_floor(tilt: f32) -> Scene {
             name: "floor".into(),
             mesh: 0,
             transform: glam::Mat4::IDENTITY,
+            nodes: vec![],
         }],
         lights: vec![Light {
             name: "low".into(),

@@ -90,6 +90,7 @@ pub fn import_slice(path: &Path, bytes: &[u8], opts: LoadOptions) -> Result<Scen
         images: inputs.images.into_iter().map(Some).collect(),
         scene: Scene::default(),
         mesh_map: HashMap::new(),
+        sources: vec![],
         tex_map: HashMap::new(),
         skipped: 0,
         instanced_triangles: 0,
@@ -283,6 +284,8 @@ struct Importer<'a> {
     scene: Scene,
     /// (glTF mesh, primitive) → lightlab mesh.
     mesh_map: HashMap<(usize, usize), usize>,
+    /// The glTF node of each instance (what animations drive).
+    sources: Vec<crate::gltf_anim::InstanceSource>,
     /// (glTF image, sRGB) → lightlab texture.
     tex_map: HashMap<(usize, bool), usize>,
     /// Primitives skipped (points, lines).
@@ -397,6 +400,57 @@ fn uv_transform(value: Option<&Value>, tex_coord: u32) -> Result<(u32, UvTransfo
     Ok((set, t))
 }
 
+/// Nodes for the groups instances sit under (`Instance::nodes`: names only, identity
+/// transforms, so an instance's matrix stays its world transform); returns the scene's roots.
+/// Instance nodes come first in `nodes`, one per instance.
+fn group_nodes(scene: &Scene, nodes: &mut Vec<Value>) -> Vec<usize> {
+    let instances = scene.instances.len();
+    let mut groups: HashMap<Vec<String>, usize> = HashMap::new();
+    let mut roots = vec![];
+    let mut add_child = |nodes: &mut Vec<Value>, parent: Option<usize>, child: usize| match parent {
+        Some(p) => {
+            if !nodes[p]["children"].is_array() {
+                nodes[p]["children"] = json!([]);
+            }
+            nodes[p]["children"]
+                .as_array_mut()
+                .expect("an array")
+                .push(json!(child));
+        }
+        None => roots.push(child),
+    };
+    for (i, inst) in scene.instances.iter().enumerate() {
+        let mut parent = None;
+        for k in 0..inst.nodes.len() {
+            let key = inst.nodes[..=k].to_vec();
+            let g = match groups.get(&key) {
+                Some(&g) => g,
+                None => {
+                    nodes.push(json!({ "name": inst.nodes[k] }));
+                    let g = nodes.len() - 1;
+                    groups.insert(key, g);
+                    add_child(nodes, parent, g);
+                    g
+                }
+            };
+            parent = Some(g);
+        }
+        add_child(nodes, parent, i);
+    }
+    // Cameras and lights (after the instances, before the groups) hang from the root.
+    let groups_start = nodes.len() - groups.len();
+    let mut out = roots;
+    out.extend(instances..groups_start);
+    out
+}
+
+/// A node's name, or `nodeN` for an unnamed one.
+fn node_name(node: &gltf::Node) -> String {
+    node.name()
+        .map(String::from)
+        .unwrap_or_else(|| format!("node{}", node.index()))
+}
+
 impl Importer<'_> {
     /// Mesh `extras.lightlab.detailSource` = the index of the glTF mesh it was decimated from;
     /// that mesh (its first primitive) is loaded even when no node shows it.
@@ -463,6 +517,11 @@ impl Importer<'_> {
             .or_else(|| self.doc.scenes().next())
             .ok_or_else(|| gltf_err(self.path, "the file contains no scene"))?;
         self.nodes(&gscene, default_material)?;
+        let rest: Vec<Mat4> = self.scene.instances.iter().map(|i| i.transform).collect();
+        let (animation, warnings) =
+            crate::gltf_anim::import(self.path, self.doc, self.buffers, &self.sources, &rest)?;
+        self.scene.animation = animation;
+        self.scene.warnings.extend(warnings);
         self.ignored_features();
         if self.skipped > 0 {
             self.scene.warnings.push(format!(
@@ -741,19 +800,15 @@ impl Importer<'_> {
         &mut self,
         node: &gltf::Node,
         parent: Mat4,
+        above: &[String],
         default_material: usize,
     ) -> Result<Mat4, SceneError> {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        let node_name = node
-            .name()
-            .map(String::from)
-            .unwrap_or_else(|| format!("node{}", node.index()));
+        let node_name = node_name(node);
         if let Some(mesh) = node.mesh() {
             // EXT_mesh_gpu_instancing: the mesh is drawn once per instance transform.
-            let copies = match self.gpu_instances(node)? {
-                Some(t) => t.into_iter().map(|t| world * t).collect(),
-                None => vec![world],
-            };
+            let below = self.gpu_instances(node)?.unwrap_or(vec![Mat4::IDENTITY]);
+            let copies: Vec<Mat4> = below.iter().map(|t| world * *t).collect();
             for prim in mesh.primitives() {
                 let key = (mesh.index(), prim.index());
                 let id = match self.mesh_map.get(&key) {
@@ -782,6 +837,10 @@ impl Importer<'_> {
                     });
                 }
                 for (k, &transform) in copies.iter().enumerate() {
+                    self.sources.push(crate::gltf_anim::InstanceSource {
+                        node: node.index(),
+                        below: below[k],
+                    });
                     self.scene.instances.push(Instance {
                         name: match copies.len() {
                             1 => node_name.clone(),
@@ -789,6 +848,7 @@ impl Importer<'_> {
                         },
                         mesh: id,
                         transform,
+                        nodes: above.to_vec(),
                     });
                 }
             }
@@ -915,10 +975,12 @@ impl Importer<'_> {
     /// error rather than a stack overflow.
     fn nodes(&mut self, scene: &gltf::Scene, default_material: usize) -> Result<(), SceneError> {
         let mut seen = vec![false; self.doc.nodes().len()];
-        let mut stack: Vec<(gltf::Node, Mat4, usize)> =
-            scene.nodes().map(|n| (n, Mat4::IDENTITY, 1)).collect();
+        let mut stack: Vec<(gltf::Node, Mat4, usize, Vec<String>)> = scene
+            .nodes()
+            .map(|n| (n, Mat4::IDENTITY, 1, vec![]))
+            .collect();
         stack.reverse();
-        while let Some((node, parent, depth)) = stack.pop() {
+        while let Some((node, parent, depth, above)) = stack.pop() {
             let what = || format!("node {} ('{}')", node.index(), node.name().unwrap_or(""));
             if std::mem::replace(&mut seen[node.index()], true) {
                 return Err(SceneError::Content {
@@ -936,10 +998,12 @@ impl Importer<'_> {
                     problem: format!("lies deeper than {MAX_NODE_DEPTH} levels of nodes"),
                 });
             }
-            let world = self.node(&node, parent, default_material)?;
+            let world = self.node(&node, parent, &above, default_material)?;
             let children: Vec<_> = node.children().collect();
+            let mut path = above;
+            path.push(node_name(&node));
             for child in children.into_iter().rev() {
-                stack.push((child, world, depth + 1));
+                stack.push((child, world, depth + 1, path.clone()));
             }
         }
         Ok(())
@@ -1412,8 +1476,24 @@ impl Writer {
     }
 
     fn floats(&mut self, data: &[f32], comps: usize, kind: &str, minmax: bool) -> usize {
+        self.floats_in(data, comps, kind, minmax, Some(34962))
+    }
+
+    /// [`Writer::floats`] in a buffer view without a target (animation keys).
+    fn untargeted_floats(&mut self, data: &[f32], comps: usize, kind: &str, minmax: bool) -> usize {
+        self.floats_in(data, comps, kind, minmax, None)
+    }
+
+    fn floats_in(
+        &mut self,
+        data: &[f32],
+        comps: usize,
+        kind: &str,
+        minmax: bool,
+        target: Option<u32>,
+    ) -> usize {
         let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
-        let view = self.view(&bytes, Some(34962));
+        let view = self.view(&bytes, target);
         let count = data.len() / comps;
         let mut a =
             json!({ "bufferView": view, "componentType": 5126, "count": count, "type": kind });
@@ -1537,6 +1617,9 @@ impl Writer {
             }
             nodes.push(node);
         }
+        let animations = crate::gltf_anim::export(scene, &mut nodes, &mut |d, c, k, m| {
+            self.untargeted_floats(d, c, k, m)
+        });
         let mut cameras = vec![];
         for (i, c) in scene.cameras.iter().enumerate() {
             cameras.push(camera_json(c));
@@ -1577,8 +1660,8 @@ impl Writer {
         if !lights.is_empty() {
             use_ext("KHR_lights_punctual", &mut used);
         }
-        let mut gscene =
-            json!({ "name": scene.name, "nodes": (0..nodes.len()).collect::<Vec<_>>() });
+        let roots = group_nodes(scene, &mut nodes);
+        let mut gscene = json!({ "name": scene.name, "nodes": roots });
         if let (Some(uri), Some(env)) = (env_uri, &scene.environment) {
             gscene["extras"] = json!({ "lightlab": { "environment": { "uri": uri, "intensity": env.intensity } } });
         }
@@ -1602,6 +1685,9 @@ impl Writer {
         });
         if !cameras.is_empty() {
             root["cameras"] = json!(cameras);
+        }
+        if let Some(a) = animations {
+            root["animations"] = a;
         }
         if !images.is_empty() {
             root["images"] = json!(images);

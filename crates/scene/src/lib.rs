@@ -10,6 +10,7 @@ pub mod animation;
 pub mod builtin;
 pub mod emitters;
 pub mod fingerprint;
+mod gltf_anim;
 pub mod gltf_input;
 pub mod gltf_io;
 pub mod model;

@@ -146,6 +146,9 @@ pub struct Instance {
     pub mesh: usize,
     /// World-from-object transform.
     pub transform: Mat4,
+    /// The names of the glTF nodes above the instance's own, root first (empty for the
+    /// built-in scenes): the hierarchy hierarchical PRT's trees can follow.
+    pub nodes: Vec<String>,
 }
 
 impl Instance {
@@ -915,6 +918,7 @@ impl Scene {
                 name: inst.name.clone(),
                 mesh: out.meshes.len() - 1,
                 transform: Mat4::IDENTITY,
+                nodes: vec![],
             });
         }
         out
@@ -971,6 +975,7 @@ impl Scene {
             name: mesh.name.clone(),
             mesh: id,
             transform,
+            nodes: vec![],
         });
         self.meshes.push(mesh);
         id

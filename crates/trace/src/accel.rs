@@ -357,6 +357,7 @@ mod tests {
             name: "t".into(),
             mesh: 0,
             transform: Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)),
+            nodes: vec![],
         });
         s
     }

@@ -246,6 +246,7 @@ pub(crate) fn mesh_accels(scene: &Scene, tree: &Tree) -> Vec<Option<Accel>> {
                         name: m.name.clone(),
                         mesh: 0,
                         transform: Mat4::IDENTITY,
+                        nodes: vec![],
                     }],
                     ..Default::default()
                 };

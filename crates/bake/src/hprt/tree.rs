@@ -3,9 +3,10 @@
 //!
 //! Built three ways:
 //! - [`Tree::flat`]: one root composite over every instance (McKenzie's test A);
-//! - [`Tree::from_names`]: instance names as paths, `a/b/leaf` putting the leaf under the
-//!   composites `a` and `a/b` (glTF node names carry it; the built-in `prt-dynamic` groups its
-//!   ground tiles under `ground`); instances without a `/` hang from the root;
+//! - [`Tree::from_scene`]: the glTF node hierarchy (each instance's `nodes`, the names of the
+//!   nodes above it) with the instance's name read as a path below it — `a/b/leaf` puts the
+//!   leaf under the composites `a` and `a/b` ([`Tree::from_names`]); the built-in
+//!   `prt-dynamic` groups its ground tiles under `ground` / `block_I_J`;
 //! - [`Tree::by_proximity`]: single-linkage clustering of the instances' bounding boxes — two
 //!   instances whose boxes lie within `gap` of each other share a composite — the automatic
 //!   grouping the thesis leaves to future work. A cluster of one is a leaf of the root.
@@ -58,19 +59,38 @@ impl Tree {
 
     /// The tree the instance names spell (`a/b/leaf`), under one root.
     pub fn from_names<'a>(names: impl IntoIterator<Item = &'a str>) -> Tree {
+        Tree::from_paths(
+            names
+                .into_iter()
+                .map(|n| n.split('/').map(String::from).collect()),
+        )
+    }
+
+    /// The tree of a scene's glTF node hierarchy (`Instance::nodes`) with each instance's
+    /// name read as a path below it, under one root.
+    pub fn from_scene(scene: &lightlab_scene::Scene) -> Tree {
+        Tree::from_paths(scene.instances.iter().map(|i| {
+            let mut p = i.nodes.clone();
+            p.extend(i.name.split('/').map(String::from));
+            p
+        }))
+    }
+
+    /// The tree of instance paths (each a list of names, the instance's own last).
+    pub fn from_paths(paths: impl IntoIterator<Item = Vec<String>>) -> Tree {
         let mut t = Tree::default();
         let root = t.add("root", None, None);
         let mut composites: std::collections::HashMap<String, usize> = Default::default();
-        for (i, name) in names.into_iter().enumerate() {
+        for (i, parts) in paths.into_iter().enumerate() {
             let mut parent = root;
-            let parts: Vec<&str> = name.split('/').collect();
+            let name = parts.join("/");
             for k in 0..parts.len().saturating_sub(1) {
                 let path = parts[..=k].join("/");
                 parent = *composites
                     .entry(path.clone())
                     .or_insert_with(|| t.add(&path, Some(parent), None));
             }
-            t.add(name, Some(parent), Some(i));
+            t.add(&name, Some(parent), Some(i));
         }
         t
     }

@@ -5,8 +5,8 @@
 //!
 //! The ground is tiled so that each tile is a node of its own in a shadowing hierarchy, with
 //! its own light sample points (one point per 6 m ground would give it one shadow value).
-//! Instance names carry the hierarchy: `ground/tile_R_C` groups the tiles under a composite
-//! node `ground`.
+//! The tiles sit under the nodes `ground` / `block_I_J` (3 × 3 tiles each: `Instance::nodes`,
+//! glTF group nodes when exported), so a tile's siblings are few.
 
 use super::geom::*;
 use super::{sky_env, sun};
@@ -25,11 +25,15 @@ pub(super) fn prt_dynamic() -> Scene {
     let mut s = Scene::default();
     let ground = s.add_material(Material::diffuse("ground", Vec3::new(0.55, 0.53, 0.5)));
     let tile = 6.0 / TILES as f32;
-    for r in 0..TILES {
-        for c in 0..TILES {
+    // Block by block, so that the instances come in the order of the glTF hierarchy.
+    let blocks = TILES / BLOCK;
+    for (br, bc) in (0..blocks).flat_map(|a| (0..blocks).map(move |b| (a, b))) {
+        for (r, c) in
+            (0..BLOCK).flat_map(|a| (0..BLOCK).map(move |b| (br * BLOCK + a, bc * BLOCK + b)))
+        {
             let (x0, z0) = (-3.0 + c as f32 * tile, -3.0 + r as f32 * tile);
             let q = quad(
-                &format!("ground/block_{}_{}/tile_{r}_{c}", r / BLOCK, c / BLOCK),
+                &format!("tile_{r}_{c}"),
                 [
                     Vec3::new(x0, 0.0, z0 + tile),
                     Vec3::new(x0 + tile, 0.0, z0 + tile),
@@ -39,6 +43,8 @@ pub(super) fn prt_dynamic() -> Scene {
                 ground,
             );
             s.add_mesh(q, Mat4::IDENTITY);
+            let block = format!("block_{br}_{bc}");
+            s.instances.last_mut().expect("added").nodes = vec!["ground".into(), block];
         }
     }
     let warm = s.add_material(Material::diffuse("sphere", Vec3::new(0.75, 0.7, 0.62)));

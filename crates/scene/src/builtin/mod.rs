@@ -326,6 +326,7 @@ fn room() -> Scene {
         name: "pillar_2".into(),
         mesh: pillar_mesh,
         transform: Mat4::from_translation(Vec3::new(0.9, 0.0, 1.1)),
+        nodes: vec![],
     });
     add_clear_day(&mut s, Vec3::new(-0.75, -0.55, -0.25));
     s.cameras.push(Camera::look_at(
@@ -467,6 +468,7 @@ fn atrium() -> Scene {
                 name: format!("column_{k}_{}", y > 0.0),
                 mesh,
                 transform: Mat4::from_translation(Vec3::new(p.x, y, p.y)),
+                nodes: vec![],
             });
         }
     }
@@ -536,6 +538,7 @@ fn shadows() -> Scene {
             name: format!("pillar_{}", i + 2),
             mesh: pillar,
             transform: Mat4::from_translation(Vec3::new(p.0, 0.0, p.1)),
+            nodes: vec![],
         });
     }
     let cube = s.add_mesh(
@@ -554,6 +557,7 @@ fn shadows() -> Scene {
             Quat::from_rotation_y(-0.3),
             Vec3::new(1.4, 0.8, 1.2),
         ),
+        nodes: vec![],
     });
     s.instances.push(Instance {
         name: "box_3".into(),
@@ -563,6 +567,7 @@ fn shadows() -> Scene {
             Quat::from_rotation_y(0.9),
             Vec3::new(-1.5, 0.35, 0.8),
         ),
+        nodes: vec![],
     });
     s.add_mesh(
         sphere("ball", 0.5, 48, 24, stone),
@@ -756,6 +761,7 @@ fn bush() -> Scene {
                 rot,
                 trunk_top,
             ),
+            nodes: vec![],
         });
         tips.push(tip);
     }
