@@ -3,7 +3,8 @@
 //! is a group of its own and the still instances one more: a texel's rays see only its
 //! group's geometry, so the transfer stays true wherever the objects move. What moving
 //! objects do to each other and to the still ones is then the business of hierarchical PRT's
-//! filters (`crate::hprt`), not of the bake.
+//! filters (`crate::hprt`), not of the bake. `TransferSettings::self_only` makes every
+//! instance a group of its own (McKenzie's per-mesh transfer), in any scene.
 
 use crate::prt::{TransferSettings, VertexTransfer};
 use lightlab_scene::Scene;
@@ -24,9 +25,13 @@ pub(crate) struct Groups {
     pub parts: Vec<Part>,
 }
 
-/// The group of each instance: 0 for the still ones, 1, 2, … for each moving one; None
-/// for a scene without an animation (one group: everything occludes everything).
-pub fn assign(scene: &Scene) -> Option<Vec<usize>> {
+/// The group of each instance: with `self_only` each its own; else 0 for the still ones and
+/// 1, 2, … for each moving one; None for a still scene (one group: everything occludes
+/// everything).
+pub fn assign(scene: &Scene, self_only: bool) -> Option<Vec<usize>> {
+    if self_only {
+        return Some((0..scene.instances.len()).collect());
+    }
     let a = scene.animation.as_ref()?;
     let mut next = 1;
     Some(
@@ -86,7 +91,7 @@ pub fn vertex_transfer(
     scene: &Scene,
     s: &TransferSettings,
 ) -> Result<VertexTransfer, crate::prt::TransferError> {
-    let Some(of_instance) = assign(scene) else {
+    let Some(of_instance) = assign(scene, s.self_only) else {
         return Ok(crate::prt::vertex_transfer(scene, &Accel::new(scene), s)?.0);
     };
     let mut out = VertexTransfer {
@@ -122,7 +127,7 @@ mod tests {
     #[test]
     fn moving_instances_get_groups_of_their_own() {
         let s = lightlab_scene::builtin::builtin("prt-dynamic").unwrap();
-        let g = assign(&s).unwrap();
+        let g = assign(&s, false).unwrap();
         let moving: Vec<usize> = g.iter().copied().filter(|&x| x > 0).collect();
         assert_eq!(moving, vec![1, 2, 3]);
         assert_eq!(
@@ -130,6 +135,8 @@ mod tests {
             144,
             "the ground's tiles"
         );
-        assert!(assign(&lightlab_scene::builtin::builtin("prt").unwrap()).is_none());
+        let prt = lightlab_scene::builtin::builtin("prt").unwrap();
+        assert!(assign(&prt, false).is_none());
+        assert_eq!(assign(&prt, true).unwrap(), vec![0, 1, 2]);
     }
 }

@@ -64,6 +64,12 @@ pub struct TransferSettings {
     /// `texels::normal_mapped_normal`): the transfer of `shl-normalmapped`.
     #[serde(default)]
     pub normal_mapped: bool,
+    /// Each instance occludes only itself (McKenzie Chapter's per-mesh transfer, what
+    /// `prt-hierarchical` needs: what objects do to each other is its filters' business).
+    /// Without it, the moving instances of an animated scene still get transfer of their own
+    /// (`crate::occlusion_groups`).
+    #[serde(default)]
+    pub self_only: bool,
 }
 
 impl Default for TransferSettings {
@@ -75,6 +81,7 @@ impl Default for TransferSettings {
             seed: 0,
             detail: Some(crate::detail::DetailSettings::default()),
             normal_mapped: false,
+            self_only: false,
         }
     }
 }

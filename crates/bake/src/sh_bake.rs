@@ -75,12 +75,12 @@ pub(crate) fn prepare(
         sources: vec![],
         groups: None,
     };
-    if let Some(of_instance) = crate::occlusion_groups::assign(&prep.scene) {
+    if let Some(of_instance) = crate::occlusion_groups::assign(&prep.scene, s.self_only) {
         if matches!(s.kind, TransferKind::Shooting(_)) {
             return Err(crate::BakeError::Settings(
-                "CaSHL shooting bakes one transfer for the whole scene, but the scene is \
-                 animated and its moving objects need transfer of their own: use \
-                 --transfer shadowed or interreflected"
+                "CaSHL shooting bakes one transfer for the whole scene, but this bake gives \
+                 objects transfer of their own (an animated scene, or --occluders object): \
+                 use --transfer shadowed or interreflected"
                     .into(),
             ));
         }

@@ -274,6 +274,7 @@ fn sh_lightmaps_match_the_reference_on_prt() {
             // it is (the reference renders its own geometry, not its high-poly source).
             normal_mapped: true,
             detail: None,
+            self_only: false,
         };
         let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
         for bands in [3, 4, 5, 6] {
@@ -588,6 +589,7 @@ fn normal_mapped_sh_lightmaps_on_prt() {
             normal_mapped,
             // The reference renders the decimated knot as it is.
             detail: None,
+            self_only: false,
         };
         let sl = bake_sh_lightmaps(&scene, &layout, &s, &lightlab_bake::no_progress).unwrap();
         render_sh_lightmaps(&sl, &lighting, w, w, 0, 8).unwrap()

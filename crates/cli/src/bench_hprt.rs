@@ -96,27 +96,34 @@ pub fn run(scene: (&str, &LoadArgs), bake: &BakeArgs, a: &HprtBenchArgs, json: b
         scene.name
     );
     let s = bake.transfer_settings()?;
-    let t = Instant::now();
-    let sl = bake_sh_lightmaps(
-        &scene,
-        &bake.layout(&scene),
-        &s,
-        &lightlab_bake::no_progress,
-    )?;
-    eprintln!(
-        "baked {} SH light-maps ({} bands) in {:.1} s",
-        scene.name,
-        s.bands,
-        t.elapsed().as_secs_f64()
-    );
+    // prt-textured's bake, and prt-hierarchical's (each object's transfer its own).
+    let mut bakes = vec![];
+    for self_only in [false, true] {
+        let t = Instant::now();
+        let ts = lightlab_bake::prt::TransferSettings { self_only, ..s };
+        let layout = bake.layout(&scene);
+        bakes.push(bake_sh_lightmaps(
+            &scene,
+            &layout,
+            &ts,
+            &lightlab_bake::no_progress,
+        )?);
+        eprintln!(
+            "baked {} SH light-maps ({} bands, self-only {self_only}) in {:.1} s",
+            scene.name,
+            s.bands,
+            t.elapsed().as_secs_f64()
+        );
+    }
     let refs = references(&scene, a)?;
     let mut rows = vec![];
     for (name, settings) in variants(s.bands) {
+        let sl = &bakes[usize::from(settings.is_some())];
         let mut errors = vec![];
         let mut change = vec![];
         for (k, &f) in a.frames.iter().enumerate() {
-            let img = view(&sl, settings, f, a)?;
-            let next = view(&sl, settings, f + 1, a)?;
+            let img = view(sl, settings, f, a)?;
+            let next = view(sl, settings, f + 1, a)?;
             errors.push(lightlab_core::metrics::relmse(&img, &refs[k].0)?);
             change.push(mean_change(&img, &next) / mean_change(&refs[k].0, &refs[k].1).max(1e-9));
         }
@@ -127,7 +134,7 @@ pub fn run(scene: (&str, &LoadArgs), bake: &BakeArgs, a: &HprtBenchArgs, json: b
         );
         rows.push(serde_json::json!({"variant": name, "relmse": errors, "stability": change}));
     }
-    let timing = filter_times(&sl.scene, s.bands)?;
+    let timing = filter_times(&bakes[1].scene, s.bands)?;
     if json {
         println!(
             "{}",

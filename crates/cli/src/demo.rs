@@ -182,7 +182,7 @@ fn demo_techniques(scene: &str) -> Vec<Technique> {
     if lightmap_density(scene).is_some() {
         families.push(Family::Lightmap);
     }
-    if scene == "prt" {
+    if matches!(scene, "prt" | "prt-dynamic") {
         families.push(Family::Sh);
     }
     if matches!(scene, "bush" | "cornell" | "room" | "atrium") {

@@ -649,6 +649,11 @@ pub struct BakeArgs {
     /// (Fuchs §5.7; the data of `shl-normalmapped`).
     #[arg(long)]
     pub normal_mapped: bool,
+    /// What shadows an object's SH transfer: `scene` (everything; the moving objects of an
+    /// animated scene, only themselves) or `object` (each object only itself: McKenzie's
+    /// per-mesh transfer, which `prt-hierarchical` needs and bakes by default).
+    #[arg(long, default_value = "scene")]
+    pub occluders: Occluders,
     /// `--method sh`: bake decimated meshes (glTF mesh extras.lightlab.detailSource) as they
     /// are, instead of taking position, normal and occlusion from their high-poly source.
     #[arg(long)]
@@ -682,6 +687,7 @@ impl Default for BakeArgs {
             bounces: None,
             transfer_samples: 256,
             normal_mapped: false,
+            occluders: Occluders::Scene,
             no_detail: false,
             detail_cage: 0.05,
             compress: None,
@@ -789,9 +795,19 @@ impl BakeArgs {
                 cage: self.detail_cage,
             }),
             normal_mapped: self.normal_mapped,
+            self_only: self.occluders == Occluders::Object,
         })
     }
 }
+
+/// What shadows an object's SH transfer (`--occluders`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Occluders {
+    #[default]
+    Scene,
+    Object,
+}
+lightlab_core::named_enum!(Occluders, "occluders", { Scene => "scene", Object => "object" });
 
 /// Run-time options of the SH techniques.
 #[derive(Args, Clone, Debug)]

@@ -23,6 +23,8 @@ fn relmse(a: &std::path::Path, b: &std::path::Path) -> f64 {
 #[test]
 fn hierarchical_prt_halves_textured_prts_error_between_moving_objects() {
     let dir = tempfile::tempdir().unwrap();
+    // Each object's transfer its own (prt-hierarchical's bake); on prt-dynamic, whose still
+    // objects are coplanar tiles, prt-textured's own bake is the same.
     let baked = dir.path().join("sh");
     ok(&lightlab(&[
         "bake",
@@ -30,6 +32,8 @@ fn hierarchical_prt_halves_textured_prts_error_between_moving_objects() {
         "prt-dynamic",
         "--method",
         "sh",
+        "--occluders",
+        "object",
         "--out",
         baked.to_str().unwrap(),
     ]));
@@ -83,6 +87,38 @@ fn frames_pose_animated_scenes_only() {
         assert!(stderr(&o).contains("has no animation"), "{}", stderr(&o));
         assert!(!out.exists());
     }
+    // A bake where objects shadow each other would be shadowed twice.
+    let baked = dir.path().join("sh");
+    ok(&lightlab(&[
+        "bake",
+        "--scene",
+        "cornell",
+        "--method",
+        "sh",
+        "--texels-per-metre",
+        "2",
+        "--transfer-samples",
+        "16",
+        "--bands",
+        "2",
+        "--out",
+        baked.to_str().unwrap(),
+    ]));
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "cornell",
+        "--technique",
+        "prt-hierarchical",
+        "--baked",
+        baked.to_str().unwrap(),
+        "--width",
+        "8",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--occluders object"), "{}", stderr(&o));
     // prt-hierarchical needs per-object sample points.
     let o = lightlab(&[
         "render",

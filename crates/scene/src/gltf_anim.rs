@@ -274,11 +274,7 @@ pub(crate) type AddFloats<'a> = dyn FnMut(&[f32], usize, &str, bool) -> usize + 
 /// Write `scene`'s animation: the driven instance nodes become TRS nodes; returns the
 /// `animations` array (None without an animation). `floats(data, comps, type, minmax)` adds an
 /// accessor.
-pub(crate) fn export(
-    scene: &Scene,
-    nodes: &mut [Value],
-    floats: &mut AddFloats,
-) -> Option<Value> {
+pub(crate) fn export(scene: &Scene, nodes: &mut [Value], floats: &mut AddFloats) -> Option<Value> {
     let a = scene.animation.as_ref()?;
     let mut samplers = vec![];
     let mut channels = vec![];

@@ -49,6 +49,8 @@ pub fn data<'b>(req: &Request<'b>, bakes: &'b mut Bakes) -> Result<ShData<'b>> {
     let mut s = req.args.bake.transfer_settings()?;
     // Fuchs §5.7: only the bake changes; the renderer is shl's.
     s.normal_mapped |= req.technique == Technique::ShlNormalmapped;
+    // McKenzie ch. 5: each object's transfer is its self-shadowing; the filters add the rest.
+    s.self_only |= req.technique == Technique::PrtHierarchical;
     let scene = req.scene;
     if req.technique == Technique::PrtVertex {
         let key = match &req.args.baked {
@@ -107,6 +109,17 @@ pub fn data<'b>(req: &Request<'b>, bakes: &'b mut Bakes) -> Result<ShData<'b>> {
              --normal-mapped` for {}",
             dir.display(),
             req.technique
+        );
+    }
+    if let Some(dir) = &req.args.baked
+        && s.self_only
+        && !sl.settings.self_only
+    {
+        bail!(
+            "{} was baked with every object shadowing every other, and prt-hierarchical's \
+             filters would shadow them twice; bake it with `lightlab bake --method sh \
+             --occluders object`",
+            dir.display()
         );
     }
     if req.technique != Technique::ShlCompressed {
