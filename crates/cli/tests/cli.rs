@@ -14,7 +14,14 @@ fn scenes_lists_one_name_per_line() {
     assert_eq!(
         names,
         [
-            "cornell", "room", "shadows", "bush", "prt", "spheres", "atrium"
+            "cornell",
+            "room",
+            "shadows",
+            "bush",
+            "prt",
+            "spheres",
+            "atrium",
+            "prt-dynamic"
         ]
     );
 }
@@ -753,6 +760,22 @@ fn viewer_window_shows_what_render_writes() {
                     "--bands".into(),
                     "3".into(),
                 ],
+            ),
+            // Its own bake (each object's transfer its own), small, made at load.
+            "prt-hierarchical" => (
+                "shadows",
+                [
+                    "--transfer-samples",
+                    "8",
+                    "--bands",
+                    "3",
+                    "--texels-per-metre",
+                    "4",
+                ]
+                .into_iter()
+                .chain(["--hprt-samples", "64"])
+                .map(String::from)
+                .collect(),
             ),
             t if t.starts_with("prt") || t.starts_with("shl") => {
                 ("shadows", vec!["--baked".to_string(), path(&sh)])

@@ -394,57 +394,57 @@ impl App<'_> {
         }
     }
 
+    /// Build the chosen technique's renderer; false when the viewer must exit (the first
+    /// renderer failed).
+    fn rebuild_renderer(&mut self, event_loop: &ActiveEventLoop) -> bool {
+        let Some(gfx) = self.gfx.as_mut() else {
+            return false;
+        };
+        self.rebuild = false;
+        let (w, h) = (gfx.config.width, gfx.config.height);
+        let name = self.cfg.techniques[self.technique].clone();
+        match (self.make)(&gfx.ctx, &name, w, h) {
+            Ok((r, steps, animation)) => {
+                let (rw, rh) = r.size();
+                gfx.lens = steps.map(|s| lens::LensState::new(&gfx.ctx, s, rw, rh));
+                gfx.animation = animation.map(|a| (a, None));
+                gfx.renderer = Some(r);
+                self.message = None;
+            }
+            Err(message) if gfx.renderer.is_none() => {
+                self.result = Err(ViewerError::Renderer {
+                    technique: name,
+                    message: message.to_string(),
+                });
+                event_loop.exit();
+                return false;
+            }
+            Err(message) => self.message = Some(format!("{name}: {message}")),
+        }
+        true
+    }
+
     fn frame(&mut self, event_loop: &ActiveEventLoop) {
         let now = Instant::now();
         let dt = (now - self.last).as_secs_f32();
         self.last = now;
         self.fly(dt);
+        if self.rebuild && !self.rebuild_renderer(event_loop) {
+            return;
+        }
         let Some(gfx) = self.gfx.as_mut() else {
             return;
         };
         let (w, h) = (gfx.config.width, gfx.config.height);
-        if self.rebuild {
-            self.rebuild = false;
-            let name = self.cfg.techniques[self.technique].clone();
-            match (self.make)(&gfx.ctx, &name, w, h) {
-                Ok((r, steps, animation)) => {
-                    let (rw, rh) = r.size();
-                    gfx.lens = steps.map(|s| lens::LensState::new(&gfx.ctx, s, rw, rh));
-                    gfx.animation = animation.map(|a| (a, None));
-                    gfx.renderer = Some(r);
-                    self.message = None;
-                }
-                Err(message) if gfx.renderer.is_none() => {
-                    self.result = Err(ViewerError::Renderer {
-                        technique: name,
-                        message: message.to_string(),
-                    });
-                    event_loop.exit();
-                    return;
-                }
-                Err(message) => self.message = Some(format!("{name}: {message}")),
-            }
+        if self.animate {
+            self.clock += dt;
+        }
+        if let Some(m) = play(gfx, &mut self.motion, self.clock) {
+            self.message = Some(m);
         }
         let Some(renderer) = gfx.renderer.as_mut() else {
             return;
         };
-        if self.animate {
-            self.clock += dt;
-        }
-        match gfx.animation.as_mut() {
-            // An animated scene plays its own animation (from frame 0 until M starts it).
-            Some((player, last)) => {
-                let (fps, frames) = player.rate();
-                let k = (self.clock * fps) as u32 % frames.max(1);
-                if *last != Some(k) {
-                    *last = Some(k);
-                    if let Err(e) = player.pose(&gfx.ctx, renderer, k) {
-                        self.message = Some(format!("frame {k}: {e}"));
-                    }
-                }
-            }
-            None => motion::pose(&mut self.motion, self.clock, &gfx.ctx, renderer),
-        }
         let camera = self.orbit.camera();
         let transform = camera.transform;
         renderer.set_camera(&gfx.ctx, camera);
@@ -623,6 +623,26 @@ impl App<'_> {
         }
         gfx.window.request_redraw();
     }
+}
+
+/// Pose the scene for `clock`: an animated scene plays its own animation (frame 0 until M
+/// starts the clock), others move their mirror-like objects; returns a posing error to show.
+fn play(gfx: &mut Gfx, motion: &mut Option<motion::Motion>, clock: f32) -> Option<String> {
+    let renderer = gfx.renderer.as_mut()?;
+    let Some((player, last)) = gfx.animation.as_mut() else {
+        motion::pose(motion, clock, &gfx.ctx, renderer);
+        return None;
+    };
+    let (fps, frames) = player.rate();
+    let k = (clock * fps) as u32 % frames.max(1);
+    if *last == Some(k) {
+        return None;
+    }
+    *last = Some(k);
+    player
+        .pose(&gfx.ctx, renderer, k)
+        .err()
+        .map(|e| format!("frame {k}: {e}"))
 }
 
 /// Write the shown image (the renderer's frame or the lens's film) as the window displays

@@ -109,34 +109,53 @@ pub(crate) struct Caster<'a> {
 }
 
 impl Caster<'_> {
-    /// Whether the ray from `o` along `d` hits one of `occluders`; counts face queries.
-    pub fn blocked(&self, o: Vec3, d: Vec3, occluders: &[usize], faces: &mut u64) -> bool {
+    /// Each instance under `occluders` whose boxes (its node's, its own) the ray from `o`
+    /// along `d` passes, with its BVH and its world-to-object transform, until `f` says stop.
+    /// Counts the instances reached as face queries.
+    fn candidates(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        occluders: &[usize],
+        faces: &mut u64,
+        mut f: impl FnMut(usize, &Accel, Mat4) -> bool,
+    ) {
         let inv_d = d.recip();
         for &n in occluders {
             if !hits_box(o, inv_d, self.place.node_bounds[n]) {
                 continue;
             }
-            if self.occlusion == Occlusion::Blob {
-                return true;
-            }
             for &i in &self.under[n] {
                 if !hits_box(o, inv_d, self.place.bounds[i]) {
                     continue;
                 }
-                let Some(accel) = &self.accels[self.scene.instances[i].mesh] else {
-                    continue;
-                };
-                *faces += 1;
-                let m = self.place.inverse[i];
-                if accel.occluded(m.transform_point3(o), m.transform_vector3(d), f32::INFINITY) {
-                    return true;
+                if let Some(accel) = &self.accels[self.scene.instances[i].mesh] {
+                    *faces += 1;
+                    if f(i, accel, self.place.inverse[i]) {
+                        return;
+                    }
                 }
             }
         }
-        false
     }
 
-    /// The first face of `occluders` the ray from `o` along `d` hits (faces only).
+    /// Whether the ray from `o` along `d` hits one of `occluders` (its box, as a blob).
+    pub fn blocked(&self, o: Vec3, d: Vec3, occluders: &[usize], faces: &mut u64) -> bool {
+        if self.occlusion == Occlusion::Blob {
+            let inv_d = d.recip();
+            return occluders
+                .iter()
+                .any(|&n| hits_box(o, inv_d, self.place.node_bounds[n]));
+        }
+        let mut hit = false;
+        self.candidates(o, d, occluders, faces, |_, accel, m| {
+            hit = accel.occluded(m.transform_point3(o), m.transform_vector3(d), f32::INFINITY);
+            hit
+        });
+        hit
+    }
+
+    /// The first face of `occluders` the ray from `o` along `d` hits.
     pub fn closest(
         &self,
         o: Vec3,
@@ -144,41 +163,24 @@ impl Caster<'_> {
         occluders: &[usize],
         faces: &mut u64,
     ) -> Option<Blocker> {
-        let inv_d = d.recip();
         let mut best: Option<(f32, Blocker)> = None;
-        for &n in occluders {
-            if !hits_box(o, inv_d, self.place.node_bounds[n]) {
-                continue;
-            }
-            for &i in &self.under[n] {
-                if !hits_box(o, inv_d, self.place.bounds[i]) {
-                    continue;
-                }
-                let Some(accel) = &self.accels[self.scene.instances[i].mesh] else {
-                    continue;
-                };
-                *faces += 1;
-                let m = self.place.inverse[i];
-                let tmax = best.map_or(f32::INFINITY, |b| b.0);
-                let Some(h) = accel.intersect(m.transform_point3(o), m.transform_vector3(d), tmax)
-                else {
-                    continue;
-                };
+        self.candidates(o, d, occluders, faces, |i, accel, m| {
+            let tmax = best.map_or(f32::INFINITY, |b| b.0);
+            if let Some(h) = accel.intersect(m.transform_point3(o), m.transform_vector3(d), tmax) {
                 let w = accel.world_triangle(h.slot);
                 let n_obj = (w[1] - w[0]).cross(w[2] - w[0]);
-                let mut normal = (m.transpose().transform_vector3(n_obj)).normalize_or(-d);
-                if normal.dot(d) > 0.0 {
-                    normal = -normal;
-                }
+                let normal = m.transpose().transform_vector3(n_obj).normalize_or(-d);
                 let b = Blocker {
                     dir: 0,
                     instance: i as u32,
                     point: o + d * h.t,
-                    normal,
+                    // Facing the ray.
+                    normal: if normal.dot(d) > 0.0 { -normal } else { normal },
                 };
                 best = Some((h.t, b));
             }
-        }
+            false
+        });
         best.map(|b| b.1)
     }
 
