@@ -14,6 +14,7 @@ mod gltf_anim;
 pub mod gltf_input;
 pub mod gltf_io;
 pub mod model;
+pub mod photometry;
 pub mod simplify;
 pub mod validate;
 
