@@ -6,6 +6,9 @@ use glam::Vec3;
 use lightlab_core::sampling::{Rng, uniform_sphere};
 use lightlab_scene::photometry::{Goniometric, PhotometryType, ies, ldt};
 
+/// A distribution: candela at (horizontal, vertical) angles in degrees.
+type Dist = dyn Fn(f32, f32) -> f32;
+
 fn range(a: f32, b: f32, step: f32) -> Vec<f32> {
     let n = ((b - a) / step).round() as usize;
     (0..=n).map(|k| a + k as f32 * step).collect()
@@ -96,7 +99,7 @@ fn g(gamma: f32) -> f32 {
 #[test]
 fn type_c_symmetries_reproduce_their_distributions() {
     let vs = range(0.0, 180.0, 2.5);
-    let cases: Vec<(&str, Vec<f32>, Box<dyn Fn(f32, f32) -> f32>)> = vec![
+    let cases: Vec<(&str, Vec<f32>, Box<Dist>)> = vec![
         ("rotational", vec![0.0], Box::new(|_, v| g(v))),
         (
             "quadrant",
@@ -136,7 +139,7 @@ fn type_c_symmetries_reproduce_their_distributions() {
 
 #[test]
 fn eulumdat_symmetries_reproduce_their_distributions() {
-    let cases: Vec<(u32, &str, Box<dyn Fn(f32, f32) -> f32>)> = vec![
+    let cases: Vec<(u32, &str, Box<Dist>)> = vec![
         (
             0,
             "none",

@@ -15,10 +15,7 @@ pub type TiltReader<'a> = dyn Fn(&str) -> Result<String, PhotometryError> + 'a;
 
 /// Parse an IES file's text. `tilt_file` reads the file a `TILT=<name>` line names (None:
 /// such a file is refused).
-pub fn parse(
-    text: &str,
-    tilt_file: Option<&TiltReader>,
-) -> Result<Goniometric, PhotometryError> {
+pub fn parse(text: &str, tilt_file: Option<&TiltReader>) -> Result<Goniometric, PhotometryError> {
     let mut lines = text.lines();
     let tilt = loop {
         let Some(line) = lines.next() else {
