@@ -359,19 +359,22 @@ impl Hierarchy {
     /// `rotations` (each instance's rotation since its bake).
     pub fn relight(&self, world: &ShLighting, rotations: Option<&[DMat3]>) -> ShLighting {
         let mut out = world.clone();
-        for (i, group) in out.coeffs.iter_mut().enumerate() {
-            let filters = self.filters_of(i);
-            for (k, light) in group.iter_mut().enumerate() {
-                *light = match filters.and_then(|f| f.get(k)) {
-                    Some(f) => self.combine(&f.coeffs, light),
-                    None => {
-                        let mut l = light.clone();
-                        self.settings.window.apply(&mut l);
-                        l
-                    }
-                };
-            }
-        }
+        out.coeffs
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(i, group)| {
+                let filters = self.filters_of(i);
+                for (k, light) in group.iter_mut().enumerate() {
+                    *light = match filters.and_then(|f| f.get(k)) {
+                        Some(f) => self.combine(&f.coeffs, light),
+                        None => {
+                            let mut l = light.clone();
+                            self.settings.window.apply(&mut l);
+                            l
+                        }
+                    };
+                }
+            });
         if self.settings.bounce {
             let bounce = self.bounce(&out);
             for (group, b) in out.coeffs.iter_mut().zip(bounce) {
@@ -397,13 +400,23 @@ impl Hierarchy {
     /// them (windowed): Σ_hits w·Y(ωₛ)·ρ·E/π, E the occluder's filtered light `lit` at its
     /// sample point nearest the hit, integrated against the clamped cosine of the hit's normal.
     fn bounce(&self, lit: &ShLighting) -> Vec<Vec<Vec<DVec3>>> {
-        let nc = sh::num_coeffs(self.settings.bands);
-        let cosine = sh::clamped_cosine_zonal(self.settings.bands);
+        let bands = self.settings.bands;
+        let nc = sh::num_coeffs(bands);
+        // The clamped cosine about n is Σ s_l·Y_lm(n)·Y_lm (zonal rotation, `sh::zonal_to_axis`).
+        let cosine = sh::clamped_cosine_zonal(bands);
+        let scale: Vec<f64> = (0..nc)
+            .map(|c| {
+                let l = (c as f64).sqrt() as usize;
+                (4.0 * std::f64::consts::PI / (2 * l + 1) as f64).sqrt() * cosine[l]
+            })
+            .collect();
         (0..lit.coeffs.len())
+            .into_par_iter()
             .map(|i| {
                 let Some(filters) = self.filters_of(i) else {
                     return vec![vec![DVec3::ZERO; nc]; lit.coeffs[i].len()];
                 };
+                let mut y = vec![0.0f64; nc];
                 filters
                     .iter()
                     .map(|f| {
@@ -411,13 +424,17 @@ impl Hierarchy {
                         for h in &f.hits {
                             let j = h.instance as usize;
                             let q = nearest(&lit.points[j], h.point);
-                            let a = sh::zonal_to_axis(&cosine, h.normal.as_dvec3());
-                            let e: DVec3 =
-                                lit.coeffs[j][q].iter().zip(&a).map(|(l, a)| *l * *a).sum();
+                            let n = h.normal.as_dvec3();
+                            sh::eval_f64(bands, n.x, n.y, n.z, &mut y);
+                            let e: DVec3 = lit.coeffs[j][q]
+                                .iter()
+                                .zip(y.iter().zip(&scale))
+                                .map(|(l, (y, s))| *l * (y * s))
+                                .sum();
                             let rad = self.albedo[j] * e.max(DVec3::ZERO) / std::f64::consts::PI;
-                            let y = &self.basis[h.dir as usize * nc..(h.dir as usize + 1) * nc];
-                            for (o, y) in b.iter_mut().zip(y) {
-                                *o += rad * *y;
+                            let basis = &self.basis[h.dir as usize * nc..(h.dir as usize + 1) * nc];
+                            for (o, yb) in b.iter_mut().zip(basis) {
+                                *o += rad * *yb;
                             }
                         }
                         self.settings.window.apply(&mut b);
