@@ -6,7 +6,7 @@
 //! rotation then a translation interpolated between keys (linear and spherical-linear, held
 //! before the first key and after the last). Frame K is time (K mod frames) / fps.
 
-use crate::{Scene, SceneError};
+use crate::Scene;
 use glam::{Mat4, Quat, Vec3};
 
 /// The scene's animation.
@@ -128,34 +128,6 @@ impl Scene {
             self.instances[tr.instance].transform = tr.motion(t) * rest;
         }
     }
-
-    /// The rotation of each instance at frame `k` relative to its rest pose (identity for the
-    /// still ones): what turns a baked transfer's light into the object's frame.
-    pub fn rotations_at(&self, frame: u32) -> Vec<glam::DMat3> {
-        let mut out = vec![glam::DMat3::IDENTITY; self.instances.len()];
-        if let Some(a) = &self.animation {
-            let t = a.time(frame);
-            for tr in &a.tracks {
-                let (_, r, _) = tr.motion(t).to_scale_rotation_translation();
-                out[tr.instance] = glam::DMat3::from_quat(r.as_dquat());
-            }
-        }
-        out
-    }
-
-    /// Refuse a malformed animation (for scenes built in code; glTF import checks its own).
-    pub fn check_animation(&self) -> Result<(), SceneError> {
-        match &self.animation {
-            Some(a) => a
-                .check(self.instances.len())
-                .map_err(|problem| SceneError::Content {
-                    path: self.name.clone().into(),
-                    what: "animation".into(),
-                    problem,
-                }),
-            None => Ok(()),
-        }
-    }
 }
 
 #[cfg(test)]
@@ -206,5 +178,10 @@ mod tests {
         let mut bad = ok;
         bad.tracks.push(track());
         assert!(bad.check(1).unwrap_err().contains("two tracks"));
+        // Validation refuses it as it refuses any bad content.
+        let mut s = crate::builtin::builtin("prt-dynamic").unwrap();
+        s.animation.as_mut().unwrap().tracks[0].instance = 10_000;
+        let e = crate::validate::validate(&mut s, "d".as_ref(), Default::default()).unwrap_err();
+        assert!(e.to_string().contains("animation"), "{e}");
     }
 }

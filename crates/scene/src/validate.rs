@@ -33,6 +33,10 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         problem,
     };
     check_materials(scene, path)?;
+    if let Some(a) = &scene.animation {
+        a.check(scene.instances.len())
+            .map_err(|problem| content("animation".into(), problem))?;
+    }
     let nmat = scene.materials.len();
     let nmesh = scene.meshes.len();
     for (k, mesh) in scene.meshes.iter_mut().enumerate() {
