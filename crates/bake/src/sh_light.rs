@@ -80,14 +80,14 @@ pub fn project_punctual(scene: &Scene, bands: usize, q: Vec3) -> Vec<DVec3> {
     for l in &scene.lights {
         let rgb = (l.color * l.intensity).as_dvec3();
         let (coeffs, e) = match l.kind {
-            LightKind::Point | LightKind::Spot { .. } => {
+            LightKind::Point | LightKind::Spot { .. } | LightKind::Goniometric { .. } => {
                 let to = l.position - q;
                 let d2 = to.length_squared();
                 if d2 <= 1e-12 || l.range.is_some_and(|r| d2 > r * r) {
                     continue;
                 }
                 let wi = to / d2.sqrt();
-                let spot = l.spot_factor(-wi);
+                let spot = l.emission(-wi);
                 if spot <= 0.0 {
                     continue;
                 }

@@ -17,6 +17,7 @@ pub mod layout;
 pub mod lens_morph;
 pub mod lights;
 pub mod lpv;
+pub mod photometric;
 pub mod prt;
 pub mod raster;
 pub mod resources;

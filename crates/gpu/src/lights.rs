@@ -76,20 +76,31 @@ pub fn light_radius(light: &Light, atten: Attenuation, radius: Option<f32>) -> O
         _ => Some(
             radius
                 .or(light.range)
-                .unwrap_or_else(|| (light.intensity * light.color.max_element() / E_MIN).sqrt()),
+                .unwrap_or_else(|| (light.peak_intensity() / E_MIN).sqrt()),
         ),
     }
 }
 
-/// A light as the shaders see it (shadow fields left empty); `r` is its [`light_radius`].
+/// A light as the shaders see it (shadow fields and a goniometric light's profile layer left
+/// empty); `r` is its [`light_radius`].
 pub fn gpu_light(light: &Light, atten: Attenuation, r: Option<f32>) -> GpuLight {
-    let (kind, cos_inner, cos_outer) = match light.kind {
+    let (kind, cos_inner, cos_outer) = match &light.kind {
         LightKind::Point => (0, 1.0, 1.0),
         LightKind::Spot {
             inner_cone,
             outer_cone,
         } => (1, inner_cone.cos(), outer_cone.cos()),
         LightKind::Directional { .. } => (2, 1.0, 1.0),
+        LightKind::Goniometric { .. } => (4, 1.0, 1.0),
+    };
+    // A goniometric light's tilt factor is constant (its orientation is fixed): folded into
+    // the intensity; its C0 axis, at right angles to its direction, rides in edge_u.
+    let (tilt, c0) = match &light.kind {
+        LightKind::Goniometric { profile, .. } => (
+            profile.tilt_factor(light.tilt_angle()),
+            light.local_frame().row(0),
+        ),
+        _ => (1.0, Vec3::ZERO),
     };
     GpuLight {
         position: light.position.to_array(),
@@ -97,7 +108,8 @@ pub fn gpu_light(light: &Light, atten: Attenuation, r: Option<f32>) -> GpuLight 
         direction: light.direction.normalize().to_array(),
         range: r.unwrap_or(0.0),
         color: light.color.to_array(),
-        intensity: light.intensity,
+        intensity: light.intensity * tilt,
+        edge_u: c0.to_array(),
         cos_inner,
         cos_outer,
         atten_scale: atten.scale(r.unwrap_or(1.0)),

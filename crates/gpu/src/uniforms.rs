@@ -96,8 +96,10 @@ pub struct GpuLight {
     pub shadow_count: u32,
     /// 1: the diffuse term only (the environment's sun).
     pub diffuse_only: u32,
-    pub _pad1: u32,
+    /// Kind 4 (goniometric): the layer of its candela table (`photometric.rs`).
+    pub profile: u32,
     pub cascade_ends: [f32; 4],
+    /// Area lights: half the rectangle's first edge; goniometric lights: the C0 axis.
     pub edge_u: [f32; 3],
     pub area_offset: f32,
     pub edge_v: [f32; 3],
@@ -239,7 +241,7 @@ mod tests {
                     shadow_first,
                     shadow_count,
                     diffuse_only,
-                    _pad1,
+                    profile,
                     cascade_ends,
                     edge_u,
                     area_offset,

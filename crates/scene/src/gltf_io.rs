@@ -363,6 +363,35 @@ fn extras_json(extras: &gltf::json::Extras) -> Option<Value> {
         .and_then(|raw| serde_json::from_str(raw.get()).ok())
 }
 
+/// A light's photometric profile: `extras.lightlab.ies` names an IES LM-63 or EULUMDAT
+/// (`.ldt`) file relative to the glTF's folder.
+fn light_profile(
+    extras: Option<&Value>,
+    path: &Path,
+    index: usize,
+) -> Result<Option<std::sync::Arc<crate::photometry::Goniometric>>, SceneError> {
+    let Some(name) = extras.and_then(|e| e.get("lightlab")?.get("ies")) else {
+        return Ok(None);
+    };
+    let bad = |problem: String| SceneError::Content {
+        path: path.into(),
+        what: format!("light {index} extras.lightlab.ies"),
+        problem,
+    };
+    let name = name
+        .as_str()
+        .ok_or_else(|| bad("must be a file name (a string)".into()))?;
+    let folder = path.parent().unwrap_or(Path::new("."));
+    crate::photometry::read(&folder.join(name))
+        .map(|g| Some(std::sync::Arc::new(g)))
+        .map_err(|e| bad(e.0))
+}
+
+/// The file a goniometric light's profile is exported to, beside the glTF `<stem>.gltf`.
+fn profile_uri(stem: &str, light: usize) -> String {
+    format!("{stem}.light{light}.ies")
+}
+
 /// A texture reference's UV set and KHR_texture_transform (`value` is the extension's
 /// object; None = untransformed): its `texCoord` overrides the reference's.
 fn uv_transform(value: Option<&Value>, tex_coord: u32) -> Result<(u32, UvTransform), String> {
@@ -896,6 +925,27 @@ impl Importer<'_> {
                         .unwrap_or(0.0) as f32,
                 },
             };
+            let kind = match light_profile(extras.as_ref(), self.path, light.index())? {
+                Some(profile) => {
+                    if !matches!(kind, LightKind::Point) {
+                        self.scene.warnings.push(format!(
+                            "light {}: a photometric profile on a {} light; read as a point light \
+                             with the profile",
+                            light.index(),
+                            if matches!(kind, LightKind::Spot { .. }) {
+                                "spot"
+                            } else {
+                                "directional"
+                            }
+                        ));
+                    }
+                    LightKind::Goniometric {
+                        profile,
+                        c0: rigid.transform_vector3(Vec3::X).normalize(),
+                    }
+                }
+                None => kind,
+            };
             self.scene.lights.push(Light {
                 name: light.name().map(String::from).unwrap_or(node_name.clone()),
                 kind,
@@ -1389,10 +1439,7 @@ pub fn export_with(scene: &Scene, path: &Path, extras: &ExportExtras) -> Result<
             problem: "the file name must end in .glb or .gltf".into(),
         });
     }
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem_of(path);
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
@@ -1412,6 +1459,12 @@ pub fn export_with(scene: &Scene, path: &Path, extras: &ExportExtras) -> Result<
         let p = dir.join(&env_uri);
         let bytes = env.image.encode(&p, LdrSettings::default())?;
         files.push((p, bytes));
+    }
+    for (i, l) in scene.lights.iter().enumerate() {
+        if let LightKind::Goniometric { profile, .. } = &l.kind {
+            let text = crate::photometry::ies::write(profile, &l.name);
+            files.push((dir.join(profile_uri(&stem, i)), text.into_bytes()));
+        }
     }
     while !w.bin.len().is_multiple_of(4) {
         w.bin.push(0);
@@ -1452,6 +1505,13 @@ pub fn export_with(scene: &Scene, path: &Path, extras: &ExportExtras) -> Result<
     }
     lightlab_core::atomic::write_all_atomic(&files)?;
     Ok(())
+}
+
+/// The file name of `path` without its extension ("scene" when it has none).
+fn stem_of(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into())
 }
 
 #[derive(Default)]
@@ -1631,7 +1691,7 @@ impl Writer {
         for (i, l) in scene.lights.iter().enumerate() {
             let mut v =
                 json!({ "name": l.name, "color": l.color.to_array(), "intensity": l.intensity });
-            match l.kind {
+            match &l.kind {
                 LightKind::Point => v["type"] = json!("point"),
                 LightKind::Spot {
                     inner_cone,
@@ -1645,12 +1705,18 @@ impl Writer {
                     v["type"] = json!("directional");
                     v["extras"] = json!({ "angularDiameter": angular_diameter });
                 }
+                LightKind::Goniometric { .. } => {
+                    v["type"] = json!("point");
+                    v["extras"] = json!({ "lightlab": { "ies": profile_uri(&stem_of(path), i) } });
+                }
             }
             if let Some(r) = l.range {
                 v["range"] = json!(r);
             }
             lights.push(v);
-            let rot = Quat::from_rotation_arc(-Vec3::Z, l.direction.normalize());
+            // The node's local frame is the light's (−Z its direction; +X a goniometric
+            // light's C0 plane).
+            let rot = Quat::from_mat3(&l.local_frame().transpose());
             let m = Mat4::from_rotation_translation(rot, l.position);
             nodes.push(json!({
                 "name": l.name, "matrix": m.to_cols_array(),

@@ -652,8 +652,9 @@ impl Texture {
     }
 }
 
-/// Kinds of punctual light (KHR_lights_punctual), plus the sun's angular size.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Kinds of punctual light (KHR_lights_punctual), plus the sun's angular size and measured
+/// lamps.
+#[derive(Clone, Debug, PartialEq)]
 pub enum LightKind {
     Point,
     /// Cone angles in radians from the axis, as glTF (inner < outer ≤ π/2).
@@ -665,6 +666,15 @@ pub enum LightKind {
     /// ≈ 0.0093 rad (0.53°).
     Directional {
         angular_diameter: f32,
+    },
+    /// A point light whose intensity follows a measured distribution (IES LM-63 or EULUMDAT,
+    /// [`crate::photometry`]): candela towards each direction is `intensity` × the file's
+    /// candela there (so `intensity` 1 is the file's lamp), times the colour. The file's local
+    /// frame: −Z is the light's `direction` (nadir), +X is `c0` (the C0 plane; unit, at right
+    /// angles to `direction`).
+    Goniometric {
+        profile: std::sync::Arc<crate::photometry::Goniometric>,
+        c0: Vec3,
     },
 }
 
@@ -686,9 +696,12 @@ pub struct Light {
 }
 
 impl Light {
-    /// Spot-cone falloff as KHR_lights_punctual recommends (smooth between outer and inner).
-    pub fn spot_factor(&self, dir_to_point: Vec3) -> f32 {
-        match self.kind {
+    /// The factor on `intensity` towards unit direction `dir_to_point` (from the light): the
+    /// spot cone's falloff as KHR_lights_punctual recommends (smooth between outer and inner),
+    /// a measured lamp's candela there (× its tilt factor, [`Light::tilt_angle`]); 1 for
+    /// point and directional lights.
+    pub fn emission(&self, dir_to_point: Vec3) -> f32 {
+        match &self.kind {
             LightKind::Spot {
                 inner_cone,
                 outer_cone,
@@ -699,8 +712,52 @@ impl Light {
                 let t = ((cd - co) * scale).clamp(0.0, 1.0);
                 t * t
             }
+            LightKind::Goniometric { profile, .. } => {
+                profile.intensity(self.to_local(dir_to_point))
+                    * profile.tilt_factor(self.tilt_angle())
+            }
             _ => 1.0,
         }
+    }
+
+    /// The light's local frame (X = C0, Y, Z = −direction) as rows: `m * d` is `d` in the
+    /// photometric file's frame. For lights other than goniometric ones, X is any axis at
+    /// right angles to the direction.
+    pub fn local_frame(&self) -> Mat3 {
+        let z = -self.direction.normalize_or(Vec3::NEG_Z);
+        let x = match &self.kind {
+            LightKind::Goniometric { c0, .. } => *c0,
+            _ => z.any_orthonormal_vector(),
+        };
+        let x = (x - z * x.dot(z)).normalize_or(z.any_orthonormal_vector());
+        Mat3::from_cols(x, z.cross(x), z).transpose()
+    }
+
+    /// World direction `d` in the light's local frame ([`Light::local_frame`]).
+    pub fn to_local(&self, d: Vec3) -> Vec3 {
+        self.local_frame() * d
+    }
+
+    /// The lamp's tilt in degrees for an IES `TILT` table: the angle between its nadir (the
+    /// light's direction) and straight down, as luminaires are measured hanging nadir-down.
+    pub fn tilt_angle(&self) -> f32 {
+        (-self.direction.normalize_or(Vec3::NEG_Y).y)
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees()
+    }
+
+    /// The largest radiant intensity towards any direction (W/sr; the colour's largest
+    /// channel included); for a directional light, its irradiance.
+    pub fn peak_intensity(&self) -> f32 {
+        let factor = match &self.kind {
+            LightKind::Goniometric { profile, .. } => {
+                profile.candela.iter().fold(0.0f32, |a, &b| a.max(b))
+                    * profile.tilt_factor(self.tilt_angle())
+            }
+            _ => 1.0,
+        };
+        self.intensity * self.color.max_element() * factor
     }
 }
 
@@ -1073,7 +1130,7 @@ mod tests {
             direction: -Vec3::Y,
             range: None,
         };
-        assert_eq!(l.spot_factor(-Vec3::Y), 1.0);
-        assert_eq!(l.spot_factor(Vec3::X), 0.0);
+        assert_eq!(l.emission(-Vec3::Y), 1.0);
+        assert_eq!(l.emission(Vec3::X), 0.0);
     }
 }

@@ -168,6 +168,16 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         {
             return Err(content(what, "spot cone angles out of range".into()));
         }
+        if let LightKind::Goniometric { c0, .. } = &l.kind
+            && !(c0.is_finite() && c0.cross(l.direction).length() > 1e-3 * l.direction.length())
+        {
+            return Err(content(
+                what,
+                "the C0 axis of its photometric profile must be finite and not along its \
+                 direction"
+                    .into(),
+            ));
+        }
     }
     for c in &scene.cameras {
         if !(c.yfov > 0.0 && c.yfov < std::f32::consts::PI && c.transform.is_finite()) {

@@ -307,3 +307,147 @@ fn malformed_files_are_refused_with_the_reason() {
     lines[3] = "22";
     assert!(ldt::parse(&lines.join("\n")).is_err());
 }
+
+/// 200 well-spread unit directions.
+fn directions() -> Vec<Vec3> {
+    let mut rng = Rng::new(5, 0);
+    (0..200)
+        .map(|_| uniform_sphere(glam::Vec2::new(rng.next_f32(), rng.next_f32())))
+        .collect()
+}
+
+/// A glTF made by hand (not by lightlab's exporter) with two measured lamps on turned nodes:
+/// an IES file and a EULUMDAT file beside it.
+fn lamp_gltf(dir: &std::path::Path, ies_name: &str) -> std::path::PathBuf {
+    let f = |c: f32, v: f32| {
+        50.0 + 300.0 * v.to_radians().cos().max(0.0) * (1.0 + 0.5 * c.to_radians().cos())
+    };
+    let ies = ies_file(
+        1,
+        &range(0.0, 180.0, 22.5),
+        &range(0.0, 180.0, 5.0),
+        &f,
+        "TILT=NONE",
+    );
+    std::fs::write(dir.join("down.ies"), ies).unwrap();
+    std::fs::write(dir.join("flood.ldt"), ldt_file(0, 24, &f)).unwrap();
+    // A floor triangle for the scene to hold.
+    let tri: Vec<u8> = [-5.0f32, 0.0, -5.0, 5.0, 0.0, -5.0, 0.0, 0.0, 5.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    std::fs::write(dir.join("tri.bin"), tri).unwrap();
+    // Node 0: −Z turned onto +X (a quarter turn about −Y), so C0 (+X) goes to +Z.
+    let (s, c) = (
+        std::f32::consts::FRAC_PI_4.sin(),
+        std::f32::consts::FRAC_PI_4.cos(),
+    );
+    let gltf = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1,2]}}],
+"buffers":[{{"uri":"tri.bin","byteLength":36}}],
+"bufferViews":[{{"buffer":0,"byteLength":36}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[-5,0,-5],"max":[5,0,5]}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+"extensionsUsed":["KHR_lights_punctual"],
+"extensions":{{"KHR_lights_punctual":{{"lights":[
+ {{"type":"point","intensity":0.5,"color":[1,0.9,0.8],"extras":{{"lightlab":{{"ies":"{ies_name}"}}}}}},
+ {{"type":"spot","intensity":2,"spot":{{"outerConeAngle":0.5}},"extras":{{"lightlab":{{"ies":"flood.ldt"}}}}}}]}}}},
+"nodes":[
+ {{"name":"down","translation":[1,2,3],"rotation":[0,-{s},0,{c}],"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}},
+ {{"name":"flood","translation":[0,3,0],"extensions":{{"KHR_lights_punctual":{{"light":1}}}}}},
+ {{"name":"floor","mesh":0}}]}}"#
+    );
+    let path = dir.join("lamps.gltf");
+    std::fs::write(&path, gltf).unwrap();
+    path
+}
+
+#[test]
+fn gltf_lights_read_their_profiles_in_the_node_frame() {
+    use lightlab_scene::{LightKind, gltf_io};
+    let dir = tempfile::tempdir().unwrap();
+    let path = lamp_gltf(dir.path(), "down.ies");
+    let scene = gltf_io::import(&path, Default::default()).unwrap();
+    assert_eq!(scene.lights.len(), 2);
+    let down = &scene.lights[0];
+    let LightKind::Goniometric { profile, c0 } = &down.kind else {
+        panic!("{:?}", down.kind)
+    };
+    assert!(
+        (down.direction - Vec3::X).length() < 1e-5,
+        "{}",
+        down.direction
+    );
+    assert!((*c0 - Vec3::Z).length() < 1e-5, "{c0}");
+    // World direction d is local (d·C0, d·(Z×C0), −d·direction) = (d.z, −d.y, −d.x)... computed
+    // from the frame, and each candela equals the file's there, × the glTF intensity.
+    let file = ies::read(&dir.path().join("down.ies")).unwrap();
+    for d in directions() {
+        let local = Vec3::new(d.z, d.y, -d.x);
+        let want = file.intensity(local);
+        assert!(
+            (down.emission(d) - want).abs() <= 1e-3 * want.max(1.0),
+            "{d}"
+        );
+        assert!((profile.intensity(local) - want).abs() <= 1e-3 * want.max(1.0));
+    }
+    assert_eq!(down.intensity, 0.5);
+    // A spot light with a profile is read as the measured lamp, with a warning.
+    assert!(matches!(
+        scene.lights[1].kind,
+        LightKind::Goniometric { .. }
+    ));
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("profile on a spot"))
+    );
+}
+
+#[test]
+fn goniometric_lights_survive_an_export_round_trip() {
+    use lightlab_scene::{builtin, gltf_io};
+    let scene = builtin::builtin("luminaire").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("room.gltf");
+    gltf_io::export(&scene, &out).unwrap();
+    assert!(dir.path().join("room.light0.ies").exists());
+    let back = gltf_io::import(&out, Default::default()).unwrap();
+    assert_eq!(back.lights.len(), scene.lights.len());
+    for (a, b) in scene.lights.iter().zip(&back.lights) {
+        for d in directions() {
+            let (x, y) = (a.emission(d), b.emission(d));
+            assert!(
+                (x - y).abs() <= 1e-3 * x.max(1.0),
+                "{}: {d}: {x} → {y}",
+                a.name
+            );
+        }
+        assert_eq!(a.intensity, b.intensity);
+    }
+}
+
+#[test]
+fn a_missing_or_broken_profile_names_the_light_and_the_file() {
+    use lightlab_scene::gltf_io;
+    let dir = tempfile::tempdir().unwrap();
+    let path = lamp_gltf(dir.path(), "nowhere.ies");
+    let e = gltf_io::import(&path, Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("extras.lightlab.ies") && e.contains("nowhere.ies"),
+        "{e}"
+    );
+    let path = lamp_gltf(dir.path(), "down.ies");
+    std::fs::write(
+        dir.path().join("down.ies"),
+        "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 2",
+    )
+    .unwrap();
+    let e = gltf_io::import(&path, Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("light 0") && e.contains("down.ies"), "{e}");
+}

@@ -197,8 +197,8 @@ impl LightSet {
 /// E/(π·sin²α), α its angular radius, which gives irradiance E at normal incidence.
 pub fn sample_punctual(scene: &Scene, i: usize, p: Vec3, u: Vec2) -> Option<LightSample> {
     let l = &scene.lights[i];
-    match l.kind {
-        LightKind::Point | LightKind::Spot { .. } => {
+    match &l.kind {
+        LightKind::Point | LightKind::Spot { .. } | LightKind::Goniometric { .. } => {
             let to = l.position - p;
             let dist2 = to.length_squared();
             if dist2 <= 1e-16 {
@@ -211,7 +211,7 @@ pub fn sample_punctual(scene: &Scene, i: usize, p: Vec3, u: Vec2) -> Option<Ligh
                 return None;
             }
             let wi = to / dist;
-            let spot = l.spot_factor(-wi);
+            let spot = l.emission(-wi);
             if spot <= 0.0 {
                 return None;
             }

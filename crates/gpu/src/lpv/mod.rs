@@ -238,16 +238,22 @@ pub struct LpvUniforms {
 pub struct RsmLight {
     pub view_proj: [[f32; 4]; 4],
     pub eye: [f32; 3],
-    /// 0 directional, 1 spot, 2 emissive area.
+    /// 0 directional, 1 spot, 2 emissive area, 3 the camera, 4 a cube face of a goniometric
+    /// light.
     pub kind: u32,
     pub axis: [f32; 3],
     pub texel: f32,
     pub color: [f32; 3],
     pub cos_inner: f32,
     pub cos_outer: f32,
-    pub pad0: f32,
+    /// Kind 4: the layer of its candela table (`photometric.rs`), its C0 axis and nadir.
+    pub profile: u32,
     pub pad1: f32,
     pub pad2: f32,
+    pub c0: [f32; 3],
+    pub pad3: f32,
+    pub nadir: [f32; 3],
+    pub pad4: f32,
 }
 
 /// An RSM side for a grid of `grid` cells per axis: 32 texels per cell (clamped to 256..=2048,
@@ -256,6 +262,20 @@ pub struct RsmLight {
 /// with dark and bright spots (cornell's tall box at 32³ with a 256² RSM).
 pub fn rsm_size_for_grid(grid: u32) -> u32 {
     grid.saturating_mul(32).next_power_of_two().clamp(256, 2048)
+}
+
+/// The candela tables of the scene's goniometric lights, in the scene's order (the layers
+/// [`rsm_lights`] gives them).
+fn profile_texture(ctx: &GpuContext, scene: &Scene) -> wgpu::TextureView {
+    let profiles: Vec<_> = scene
+        .lights
+        .iter()
+        .filter_map(|l| match &l.kind {
+            LightKind::Goniometric { profile, .. } => Some(&**profile),
+            _ => None,
+        })
+        .collect();
+    crate::photometric::profile_texture(&ctx.device, &ctx.queue, &profiles)
 }
 
 /// Half-angle of the frustum an emissive instance is seen through.
@@ -280,6 +300,7 @@ pub fn rsm_lights(
         if d.y.abs() > 0.99 { Vec3::X } else { Vec3::Y }
     };
     let far_from = |eye: Vec3| (eye - centre).length() + radius;
+    let mut layers = 0u32;
     for l in scene.lights.iter().chain(extra) {
         let colour = l.color * l.intensity;
         // A square perspective view of half-angle `half` from `eye` along `d` (kind 1).
@@ -288,7 +309,7 @@ pub fn rsm_lights(
             color: colour.to_array(),
             ..square_view(eye, d, up_for(d), half, far_from(eye), size)
         };
-        match l.kind {
+        match &l.kind {
             LightKind::Directional { .. } => {
                 let d = l.direction.normalize();
                 let eye = centre - d * (radius * 1.01);
@@ -323,6 +344,26 @@ pub fn rsm_lights(
                     },
                     colour.max_element() * 2.0 * std::f32::consts::PI * (1.0 - half.cos()),
                 ));
+            }
+            LightKind::Goniometric { profile, .. } => {
+                // Six 90° faces, each scaled by the candela table's lookup (kind 4); layers
+                // in the scene's order ([`profile_texture`]).
+                let layer = layers;
+                layers += 1;
+                let tilt = profile.tilt_factor(l.tilt_angle());
+                for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
+                    out.push((
+                        RsmLight {
+                            kind: 4,
+                            profile: layer,
+                            c0: l.local_frame().row(0).to_array(),
+                            nadir: l.direction.normalize().to_array(),
+                            color: (colour * tilt).to_array(),
+                            ..spot_view(l.position, d, std::f32::consts::FRAC_PI_4)
+                        },
+                        l.peak_intensity() * 4.0 * std::f32::consts::PI / 6.0,
+                    ));
+                }
             }
             LightKind::Point => {
                 // Six 90° faces of a cube around the light, each a spot light without falloff
@@ -497,7 +538,9 @@ impl Lpv {
             label: Some("lpv"),
             source: wgpu::ShaderSource::Wgsl(LPV_SOURCE.as_str().into()),
         });
-        let (rsm_pipeline, rsm_group) = setup::rsm_pass(device, &module, &uniforms, &light_buf);
+        let profiles = profile_texture(ctx, scene);
+        let (rsm_pipeline, rsm_group) =
+            setup::rsm_pass(device, &module, &uniforms, &light_buf, &profiles);
         let layout = setup::compute_layout(device);
         let compute = setup::compute_pipelines(device, &module, &layout);
         let inputs = setup::CascadeInputs {
@@ -779,8 +822,8 @@ mod tests {
             src,
             "RsmLight",
             &rust_layout!(
-                RsmLight, view_proj, eye, kind, axis, texel, color, cos_inner, cos_outer, pad0,
-                pad1, pad2
+                RsmLight, view_proj, eye, kind, axis, texel, color, cos_inner, cos_outer, profile,
+                pad1, pad2, c0, pad3, nadir, pad4
             ),
         )
         .unwrap();

@@ -156,18 +156,21 @@ fn uniform_binding(binding: u32, buffer: &wgpu::Buffer, size: usize) -> wgpu::Bi
     }
 }
 
-/// The RSM pass's pipeline and bind group (volume uniforms and the view's light).
+/// The RSM pass's pipeline and bind group (volume uniforms, the view's light, the goniometric
+/// lights' candela tables).
 pub(super) fn rsm_pass(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
     uniforms: &wgpu::Buffer,
     lights: &wgpu::Buffer,
+    profiles: &wgpu::TextureView,
 ) -> (wgpu::RenderPipeline, wgpu::BindGroup) {
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("rsm"),
         entries: &[
             uniform_entry(0, S::VERTEX_FRAGMENT),
             uniform_entry(1, S::VERTEX_FRAGMENT),
+            crate::raster::bindings::texel_texture(16, wgpu::TextureViewDimension::D2Array),
         ],
     });
     let material_layout = crate::gpu_scene::material_layout(device);
@@ -211,6 +214,10 @@ pub(super) fn rsm_pass(
         entries: &[
             uniform_binding(0, uniforms, std::mem::size_of::<LpvUniforms>()),
             uniform_binding(1, lights, std::mem::size_of::<RsmLight>()),
+            wgpu::BindGroupEntry {
+                binding: 16,
+                resource: wgpu::BindingResource::TextureView(profiles),
+            },
         ],
     });
     (pipeline, group)

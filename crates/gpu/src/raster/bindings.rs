@@ -1,6 +1,7 @@
 //! The renderer's bind-group layouts, named by role, and typed helpers for their entries.
 //!
-//! Groups: `frame` (0: frame uniforms, lights, shadow views, the per-pass slot), the
+//! Groups: `frame` (0: frame uniforms, lights, shadow views, the per-pass slot, the
+//! goniometric lights' candela tables at 16), the
 //! material (1, `gpu_scene`), `lighting` (2: shadow maps, then the ambient source's resources),
 //! and the full-screen inputs (3: G-buffer, tonemap source, sky).
 
@@ -100,6 +101,7 @@ impl GroupLayouts {
                 storage(1),
                 storage(2),
                 buffer(3, wgpu::BufferBindingType::Uniform, true),
+                texel_texture(16, Dim::D2Array),
             ],
         );
         // Shadow maps (0–2), the ambient source's bindings (3..), the environment term's (20–23).

@@ -55,10 +55,17 @@ struct FrameBuffers {
     lights: wgpu::Buffer,
     views: wgpu::Buffer,
     passes: wgpu::Buffer,
+    /// The goniometric lights' candela tables.
+    profiles: wgpu::TextureView,
 }
 
 impl FrameBuffers {
-    fn new(device: &wgpu::Device, frame: &FrameUniforms, ls: &LightSet) -> FrameBuffers {
+    fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &FrameUniforms,
+        ls: &LightSet,
+    ) -> FrameBuffers {
         let init = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -104,6 +111,11 @@ impl FrameBuffers {
             lights: init("lights", bytemuck::cast_slice(&ls.lights), storage),
             views: init("shadow views", bytemuck::cast_slice(&all_views), storage),
             passes: init("pass slots", &slots, wgpu::BufferUsages::UNIFORM),
+            profiles: crate::photometric::profile_texture(
+                device,
+                queue,
+                &ls.profiles.iter().map(|p| &**p).collect::<Vec<_>>(),
+            ),
         }
     }
 }
@@ -236,6 +248,7 @@ fn groups(
                 entry(1, buffers.lights.as_entire_binding()),
                 entry(2, buffers.views.as_entire_binding()),
                 entry(3, pass_slot),
+                entry(16, R::TextureView(&buffers.profiles)),
             ],
         ),
         lighting,
@@ -375,7 +388,7 @@ impl Renderer {
             ls.light_pos.len(),
             sun.as_ref().map(|(_, e)| e),
         );
-        let buffers = FrameBuffers::new(device, &frame, &ls);
+        let buffers = FrameBuffers::new(device, &ctx.queue, &frame, &ls);
         let kind = source.kind();
         let layouts = GroupLayouts::new(device, &kind.layout_entries());
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {

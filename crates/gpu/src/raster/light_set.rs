@@ -23,6 +23,8 @@ pub(super) struct LightSet {
     /// Per light, its projection onto the planar receiver (planar shadows).
     pub planar: Vec<Option<Mat4>>,
     pub plane: Option<Vec4>,
+    /// The goniometric lights' profiles, by layer (`GpuLight::profile`).
+    pub profiles: Vec<std::sync::Arc<lightlab_scene::photometry::Goniometric>>,
 }
 
 /// How far an area light's point for shadows sits in front of its emitter: 1 % of the
@@ -102,6 +104,7 @@ impl LightSet {
             view_light: vec![],
             planar: vec![],
             plane,
+            profiles: vec![],
         };
         let sources = sources(scene, area_lights, sun);
         let sun_index = sun.map(|_| sources.len() - 1);
@@ -113,6 +116,10 @@ impl LightSet {
             };
             let mut g = lights::gpu_light(l, s.attenuation, radius);
             g.diffuse_only = (Some(li) == sun_index) as u32;
+            if let LightKind::Goniometric { profile, .. } = &l.kind {
+                g.profile = set.profiles.len() as u32;
+                set.profiles.push(profile.clone());
+            }
             if let Some((e, offset)) = area {
                 g.kind = 3;
                 g.attenuation = 0;
@@ -164,7 +171,7 @@ impl LightSet {
                 self.views
                     .push(lights::spot_view(l, outer_cone, far, s.shadow_size));
             }
-            LightKind::Point => {
+            LightKind::Point | LightKind::Goniometric { .. } => {
                 let far = lights::shadow_far(l, radius, bounds);
                 self.views
                     .extend(lights::point_views(l, far, s.shadow_size));

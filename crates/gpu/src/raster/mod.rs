@@ -21,7 +21,7 @@
 //! `readback`.
 
 mod ambient;
-mod bindings;
+pub(crate) mod bindings;
 mod build;
 pub mod env;
 pub mod env_dynamic;

@@ -69,7 +69,9 @@ struct LpvAmbientUniforms {
 
 // One light. kind: 0 point, 1 spot, 2 directional, 3 area (a Lambertian rectangle: centre
 // position − area_offset·direction, normal direction, corners centre ± edge_u ± edge_v,
-// radiance color, area intensity). Spot cones as cosines.
+// radiance color, area intensity), 4 goniometric (a measured lamp: a point light whose
+// intensity is scaled by the candela towards each direction, `profile_candela`; edge_u is
+// its C0 axis). Spot cones as cosines.
 // attenuation: 0 inverse square (glTF range window), 1..4 Fuchs (2005) §4.1 atten₁..atten₄.
 struct GpuLight {
     position: vec3<f32>,
@@ -90,7 +92,8 @@ struct GpuLight {
     // 1: lights the diffuse term only (the environment's sun, whose specular part the
     // environment map holds).
     diffuse_only: u32,
-    _pad1: u32,
+    // Kind 4: the layer of `light_profiles` holding its candela table.
+    profile: u32,
     // View-space distances ending the cascades of a directional light.
     cascade_ends: vec4<f32>,
     edge_u: vec3<f32>,
@@ -339,6 +342,42 @@ fn fuchs_attenuation(kind: u32, d: f32, r: f32) -> f32 {
     }
 }
 
+// Goniometric lights' candela tables (`photometric.rs`): layer `profile`, texel (i, j) at
+// C = i·360°/width, γ = j·180°/(height − 1) in the light's frame (γ from its direction, C from
+// its C0 axis edge_u towards direction × edge_u). Bound by the raster passes only.
+@group(0) @binding(16) var light_profiles: texture_2d_array<f32>;
+
+// Candela of a goniometric light towards unit direction `d` (from the light), bilinear.
+fn profile_candela(li: GpuLight, d: vec3<f32>) -> f32 {
+    return profile_lookup(li.profile, li.direction, li.edge_u, d);
+}
+
+// Layer `layer`'s candela towards unit `d`, for a light shining along `nadir` with C0 axis
+// `c0` (unit, at right angles).
+fn profile_lookup(layer: u32, nadir: vec3<f32>, c0: vec3<f32>, d: vec3<f32>) -> f32 {
+    let z = -nadir;
+    let x = c0;
+    let y = cross(z, x);
+    let gamma = acos(clamp(dot(d, nadir), -1.0, 1.0));
+    var c = atan2(dot(d, y), dot(d, x));
+    if c < 0.0 {
+        c += 2.0 * PI;
+    }
+    let dims = textureDimensions(light_profiles);
+    let fu = c / (2.0 * PI) * f32(dims.x);
+    let fv = gamma / PI * f32(dims.y - 1u);
+    let u0 = min(u32(floor(fu)), dims.x - 1u);
+    let u1 = (u0 + 1u) % dims.x;
+    let tu = clamp(fu - f32(u0), 0.0, 1.0);
+    let v0 = min(u32(floor(fv)), dims.y - 2u);
+    let tv = clamp(fv - f32(v0), 0.0, 1.0);
+    let a00 = textureLoad(light_profiles, vec2<u32>(u0, v0), layer, 0).r;
+    let a10 = textureLoad(light_profiles, vec2<u32>(u1, v0), layer, 0).r;
+    let a01 = textureLoad(light_profiles, vec2<u32>(u0, v0 + 1u), layer, 0).r;
+    let a11 = textureLoad(light_profiles, vec2<u32>(u1, v0 + 1u), layer, 0).r;
+    return mix(mix(a00, a10, tu), mix(a01, a11, tu), tv);
+}
+
 // Incident irradiance at normal incidence (RGB) and the unit direction to the light.
 fn light_incidence(li: GpuLight, p: vec3<f32>) -> vec4<f32> {
     if li.kind == 2u {
@@ -363,6 +402,9 @@ fn light_incidence(li: GpuLight, p: vec3<f32>) -> vec4<f32> {
         let cd = dot(li.direction, -to / d);
         let t = clamp((cd - li.cos_outer) / max(li.cos_inner - li.cos_outer, 1e-4), 0.0, 1.0);
         e *= t * t;
+    }
+    if li.kind == 4u {
+        e *= profile_candela(li, -to / d);
     }
     return vec4<f32>(e, 0.0, 0.0, 0.0);
 }

@@ -49,7 +49,8 @@ struct RsmLight {
     view_proj: mat4x4<f32>,
     eye: vec3<f32>,
     // 0 directional (orthographic), 1 spot, 2 emissive area (perspective from its centre),
-    // 3 the camera (perspective; no light, its surfels only block).
+    // 3 the camera (perspective; no light, its surfels only block), 4 a cube face of a
+    // goniometric light (perspective, × its candela table).
     kind: u32,
     // The direction the light travels (directional) or the view axis.
     axis: vec3<f32>,
@@ -59,9 +60,14 @@ struct RsmLight {
     color: vec3<f32>,
     cos_inner: f32,
     cos_outer: f32,
-    pad0: f32,
+    // Kind 4 (a cube face of a goniometric light): its candela table's layer, C0 axis, nadir.
+    profile: u32,
     pad1: f32,
     pad2: f32,
+    c0: vec3<f32>,
+    pad3: f32,
+    nadir: vec3<f32>,
+    pad4: f32,
 }
 
 @group(0) @binding(0) var<uniform> lpv: LpvUniforms;
@@ -121,6 +127,8 @@ fn rsm_fs(in: RsmVertex) -> RsmTexel {
         if light.kind == 1u {
             let s = clamp((c - light.cos_outer) / max(light.cos_inner - light.cos_outer, 1e-4), 0.0, 1.0);
             flux_in = light.color * (s * s) * solid;
+        } else if light.kind == 4u {
+            flux_in = light.color * profile_lookup(light.profile, light.nadir, light.c0, w) * solid;
         } else {
             // A Lambertian emitter: I(θ) = L·A·cosθ.
             flux_in = light.color * c * solid;

@@ -10,9 +10,11 @@
 //! | `spheres` | spheres and a torus of different materials under an environment map |
 //! | `atrium` | a two-storey colonnade around a sunlit courtyard, with coloured banners |
 //! | `prt-dynamic` | three objects moving near each other over a tiled ground (animated) |
+//! | `luminaire` | a small room lit by measured lamps (goniometric: batwing, wall washer, flood) |
 
 mod dynamic;
 pub mod geom;
+pub mod luminaire;
 
 use crate::model::*;
 use geom::*;
@@ -21,7 +23,7 @@ use lightlab_core::image::Image;
 use lightlab_core::sampling::{Rng, uniform_sphere};
 
 /// Names of the built-in scenes, in the order `lightlab scenes` lists them.
-pub const NAMES: [&str; 8] = [
+pub const NAMES: [&str; 9] = [
     "cornell",
     "room",
     "shadows",
@@ -30,6 +32,7 @@ pub const NAMES: [&str; 8] = [
     "spheres",
     "atrium",
     "prt-dynamic",
+    "luminaire",
 ];
 
 /// One-line description of a built-in scene.
@@ -47,6 +50,7 @@ pub fn describe(name: &str) -> Option<&'static str> {
         "prt-dynamic" => {
             "a sphere, a ball and a ring moving near each other over tiled ground (48 frames)"
         }
+        "luminaire" => "small room lit by measured lamps: batwing downlight, wall washer, flood",
         _ => return None,
     })
 }
@@ -62,6 +66,7 @@ pub fn builtin(name: &str) -> Option<Scene> {
         "spheres" => spheres(),
         "atrium" => atrium(),
         "prt-dynamic" => dynamic::prt_dynamic(),
+        "luminaire" => luminaire::luminaire(),
         _ => return None,
     };
     s.name = name.into();

@@ -192,3 +192,48 @@ impl Numbers {
         self.values.len() - self.at
     }
 }
+
+/// Write `g` as an LM-63-2002 file (absolute photometry, metres, multiplier 1, tilt data
+/// included): [`parse`] reads it back to the same distribution. The exporter writes a
+/// goniometric light's profile this way beside the glTF.
+pub fn write(g: &Goniometric, label: &str) -> String {
+    use std::fmt::Write;
+    let mut s = String::from("IESNA:LM-63-2002\n");
+    let _ = writeln!(s, "[TEST] written by lightlab");
+    let _ = writeln!(s, "[LUMINAIRE] {}", label.replace(['\n', '\r'], " "));
+    if g.tilt.is_empty() {
+        s.push_str("TILT=NONE\n");
+    } else {
+        s.push_str("TILT=INCLUDE\n1\n");
+        let _ = writeln!(s, "{}", g.tilt.len());
+        let _ = writeln!(s, "{}", join(g.tilt.iter().map(|t| t.0)));
+        let _ = writeln!(s, "{}", join(g.tilt.iter().map(|t| t.1)));
+    }
+    let kind = match g.kind {
+        PhotometryType::C => 1,
+        PhotometryType::B => 2,
+        PhotometryType::A => 3,
+    };
+    let o = g.opening;
+    let _ = writeln!(
+        s,
+        "1 -1 1 {} {} {kind} 2 {} {} {}",
+        g.vertical.len(),
+        g.horizontal.len(),
+        o.x,
+        o.y,
+        o.z
+    );
+    s.push_str("1 1 0\n");
+    let _ = writeln!(s, "{}", join(g.vertical.iter().copied()));
+    let _ = writeln!(s, "{}", join(g.horizontal.iter().copied()));
+    for row in g.candela.chunks(g.vertical.len()) {
+        let _ = writeln!(s, "{}", join(row.iter().copied()));
+    }
+    s
+}
+
+/// Numbers separated by blanks, each printed exactly (Rust's shortest round-trip form).
+fn join(values: impl Iterator<Item = f32>) -> String {
+    values.map(|v| v.to_string()).collect::<Vec<_>>().join(" ")
+}

@@ -26,6 +26,15 @@ pub mod ldt;
 
 use glam::Vec3;
 
+/// Read a photometric file: EULUMDAT for `.ldt` (any case), IES LM-63 otherwise.
+pub fn read(path: &std::path::Path) -> Result<Goniometric, PhotometryError> {
+    if lightlab_core::image::extension(path) == "ldt" {
+        ldt::read(path)
+    } else {
+        ies::read(path)
+    }
+}
+
 /// Which photometric web the angles describe.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PhotometryType {
@@ -208,12 +217,23 @@ impl Goniometric {
         if self.tilt.is_empty() {
             return 1.0;
         }
-        let angles: Vec<f32> = self.tilt.iter().map(|t| t.0).collect();
-        let a = angle.clamp(angles[0], *angles.last().expect("non-empty"));
-        match bracket(&angles, a) {
-            Some((i, j, f)) => self.tilt[i].1 * (1.0 - f) + self.tilt[j].1 * f,
-            None => self.tilt[0].1,
+        // A linear scan: tables are short, and the path tracer calls this per light sample.
+        let t = &self.tilt;
+        if angle <= t[0].0 {
+            return t[0].1;
         }
+        for w in t.windows(2) {
+            let ((a0, m0), (a1, m1)) = (w[0], w[1]);
+            if angle <= a1 {
+                let f = if a1 > a0 {
+                    (angle - a0) / (a1 - a0)
+                } else {
+                    1.0
+                };
+                return m0 + (m1 - m0) * f;
+            }
+        }
+        t[t.len() - 1].1
     }
 }
 
