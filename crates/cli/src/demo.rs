@@ -185,7 +185,7 @@ fn demo_techniques(scene: &str) -> Vec<Technique> {
     if matches!(scene, "prt" | "prt-dynamic") {
         families.push(Family::Sh);
     }
-    if matches!(scene, "bush" | "cornell" | "room" | "atrium") {
+    if matches!(scene, "bush" | "cornell" | "room" | "atrium" | "luminaire") {
         families.push(Family::Lpv);
     }
     families.into_iter().flat_map(Technique::of).collect()
@@ -198,6 +198,7 @@ fn lightmap_density(scene: &str) -> Option<f32> {
         "room" => Some(10.0),
         "shadows" => Some(8.0),
         "atrium" => Some(4.0),
+        "luminaire" => Some(8.0),
         _ => None,
     }
 }
