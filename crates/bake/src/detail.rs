@@ -127,6 +127,7 @@ impl DetailProjector {
                         mesh: 0,
                         transform: inst.transform,
                         nodes: vec![],
+                        luminaire: None,
                     }],
                     materials: vec![Default::default()],
                     ..Default::default()

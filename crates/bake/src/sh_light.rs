@@ -299,6 +299,7 @@ mod tests {
                 mesh: 0,
                 transform: Mat4::IDENTITY,
                 nodes: vec![],
+                luminaire: None,
             }],
             lights,
             environment: None,

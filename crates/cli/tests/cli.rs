@@ -309,7 +309,14 @@ fn demo_preview_writes_a_report_with_every_scene() {
     assert!(stdout(&o).contains("report.html"));
     let html = std::fs::read_to_string(dir.path().join("report.html")).unwrap();
     for s in [
-        "cornell", "room", "shadows", "bush", "prt", "spheres", "atrium", "luminaire",
+        "cornell",
+        "room",
+        "shadows",
+        "bush",
+        "prt",
+        "spheres",
+        "atrium",
+        "luminaire",
     ] {
         assert!(html.contains(&format!("{s}-reference.png")), "{s}");
         assert!(dir.path().join(format!("{s}-reference.exr")).exists());

@@ -32,6 +32,7 @@ pub mod envmap;
 pub mod fuzz;
 pub mod image;
 pub mod lens;
+pub mod light_slab;
 pub mod lpv;
 pub mod metrics;
 pub mod names;

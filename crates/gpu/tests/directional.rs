@@ -63,6 +63,7 @@ fn ridged_floor(tilt: f32) -> Scene {
             mesh: 0,
             transform: glam::Mat4::IDENTITY,
             nodes: vec![],
+            luminaire: None,
         }],
         lights: vec![Light {
             name: "low".into(),

@@ -94,6 +94,7 @@ pub fn import_slice(path: &Path, bytes: &[u8], opts: LoadOptions) -> Result<Scen
         tex_map: HashMap::new(),
         skipped: 0,
         instanced_triangles: 0,
+        luminaire: None,
     }
     .run()?;
     scene.name = path
@@ -292,6 +293,9 @@ struct Importer<'a> {
     skipped: usize,
     /// Triangles of the instances so far.
     instanced_triangles: u64,
+    /// The luminaire of the node being read (its own `extras.lightlab.luminaire` or one
+    /// above it).
+    luminaire: Option<String>,
 }
 
 /// A camera's glTF object, its lens in `extras.lightlab.lens`.
@@ -878,6 +882,7 @@ impl Importer<'_> {
                         mesh: id,
                         transform,
                         nodes: above.to_vec(),
+                        luminaire: self.luminaire.clone(),
                     });
                 }
             }
@@ -1025,12 +1030,12 @@ impl Importer<'_> {
     /// error rather than a stack overflow.
     fn nodes(&mut self, scene: &gltf::Scene, default_material: usize) -> Result<(), SceneError> {
         let mut seen = vec![false; self.doc.nodes().len()];
-        let mut stack: Vec<(gltf::Node, Mat4, usize, Vec<String>)> = scene
+        let mut stack: Vec<(gltf::Node, Mat4, usize, Vec<String>, Option<String>)> = scene
             .nodes()
-            .map(|n| (n, Mat4::IDENTITY, 1, vec![]))
+            .map(|n| (n, Mat4::IDENTITY, 1, vec![], None))
             .collect();
         stack.reverse();
-        while let Some((node, parent, depth, above)) = stack.pop() {
+        while let Some((node, parent, depth, above, luminaire)) = stack.pop() {
             let what = || format!("node {} ('{}')", node.index(), node.name().unwrap_or(""));
             if std::mem::replace(&mut seen[node.index()], true) {
                 return Err(SceneError::Content {
@@ -1048,12 +1053,21 @@ impl Importer<'_> {
                     problem: format!("lies deeper than {MAX_NODE_DEPTH} levels of nodes"),
                 });
             }
+            self.luminaire = extras_json(node.extras())
+                .and_then(|e| Some(e.get("lightlab")?.get("luminaire")?.as_str()?.to_string()))
+                .or(luminaire);
             let world = self.node(&node, parent, &above, default_material)?;
             let children: Vec<_> = node.children().collect();
             let mut path = above;
             path.push(node_name(&node));
             for child in children.into_iter().rev() {
-                stack.push((child, world, depth + 1, path.clone()));
+                stack.push((
+                    child,
+                    world,
+                    depth + 1,
+                    path.clone(),
+                    self.luminaire.clone(),
+                ));
             }
         }
         Ok(())
@@ -1674,6 +1688,15 @@ impl Writer {
             let mut node = json!({ "name": inst.name, "mesh": inst.mesh, "matrix": inst.transform.to_cols_array() });
             if let Some(Some(e)) = extras.instance_extras.get(i) {
                 node["extras"] = e.clone();
+            }
+            if let Some(l) = &inst.luminaire {
+                if !node["extras"].is_object() {
+                    node["extras"] = json!({});
+                }
+                if !node["extras"]["lightlab"].is_object() {
+                    node["extras"]["lightlab"] = json!({});
+                }
+                node["extras"]["lightlab"]["luminaire"] = json!(l);
             }
             nodes.push(node);
         }

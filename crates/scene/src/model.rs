@@ -149,6 +149,10 @@ pub struct Instance {
     /// The names of the glTF nodes above the instance's own, root first (empty for the
     /// built-in scenes): the hierarchy hierarchical PRT's trees can follow.
     pub nodes: Vec<String>,
+    /// The luminaire this instance belongs to (glTF `extras.lightlab.luminaire` on its node
+    /// or a node above it): lamp geometry that a canned light (`bake --method light-field`)
+    /// replaces.
+    pub luminaire: Option<String>,
 }
 
 impl Instance {
@@ -976,6 +980,7 @@ impl Scene {
                 mesh: out.meshes.len() - 1,
                 transform: Mat4::IDENTITY,
                 nodes: vec![],
+                luminaire: None,
             });
         }
         out
@@ -1033,6 +1038,7 @@ impl Scene {
             mesh: id,
             transform,
             nodes: vec![],
+            luminaire: None,
         });
         self.meshes.push(mesh);
         id

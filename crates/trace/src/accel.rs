@@ -358,6 +358,7 @@ mod tests {
             mesh: 0,
             transform: Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)),
             nodes: vec![],
+            luminaire: None,
         });
         s
     }

@@ -8,7 +8,8 @@
 pub mod accel;
 pub mod bsdf;
 pub mod lights;
+pub mod luminaire;
 pub mod render;
 
 pub use accel::Accel;
-pub use render::{LightUse, PathTracer, RenderError, RenderSettings};
+pub use render::{LightUse, PathTracer, RenderError, RenderSettings, WindowEmitter};

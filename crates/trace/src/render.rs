@@ -236,9 +236,27 @@ enum Start {
 pub struct PathTracer<'a> {
     pub scene: &'a Scene,
     pub accel: &'a Accel,
-    pub lights: LightSet,
+    pub lights: std::sync::Arc<LightSet>,
     /// Per punctual light (index into `scene.lights`): which depths it lights. Empty = all.
     pub light_use: Vec<LightUse>,
+    /// Lights that are not scene geometry, sampled at every vertex (next-event estimation
+    /// only): light slabs and luminaires seen through their windows (`luminaire.rs`).
+    pub windows: Vec<std::sync::Arc<dyn WindowEmitter>>,
+}
+
+/// A light leaving through a window that rays do not hit (a light slab, or a luminaire's
+/// geometry traced through its window): sampled by next-event estimation only.
+pub trait WindowEmitter: Send + Sync {
+    /// A point on the window and the radiance it sends to `x` × cos θ' / (r² · pdf), pdf per
+    /// unit area; None where nothing reaches x.
+    fn sample(&self, x: Vec3, rng: &mut Rng) -> Option<(Vec3, Vec3)>;
+}
+
+impl WindowEmitter for lightlab_core::light_slab::SlabEmitter {
+    fn sample(&self, x: Vec3, rng: &mut Rng) -> Option<(Vec3, Vec3)> {
+        let (pick, u) = (rng.next_f32(), rng.next_vec2());
+        lightlab_core::light_slab::SlabEmitter::sample(self, x, pick, u).map(|s| (s.point, s.value))
+    }
 }
 
 impl<'a> PathTracer<'a> {
@@ -246,8 +264,9 @@ impl<'a> PathTracer<'a> {
         PathTracer {
             scene,
             accel,
-            lights: LightSet::new(scene),
+            lights: std::sync::Arc::new(LightSet::new(scene)),
             light_use: Vec::new(),
+            windows: Vec::new(),
         }
     }
 
@@ -491,6 +510,21 @@ impl<'a> PathTracer<'a> {
             && let Some(ls) = self.lights.sample_env(env, u)
         {
             add(ls, &mut l);
+        }
+        for w in &self.windows {
+            if let Some((point, value)) = w.sample(sf.p, rng) {
+                let to = point - sf.p;
+                let dist = to.length();
+                if dist > 1e-9 {
+                    let ls = crate::lights::LightSample {
+                        wi: to / dist,
+                        dist,
+                        value,
+                        pdf: 0.0,
+                    };
+                    add(ls, &mut l);
+                }
+            }
         }
         l
     }

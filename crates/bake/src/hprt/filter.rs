@@ -249,6 +249,7 @@ pub(crate) fn mesh_accels(scene: &Scene, tree: &Tree) -> Vec<Option<Accel>> {
                         mesh: 0,
                         transform: Mat4::IDENTITY,
                         nodes: vec![],
+                        luminaire: None,
                     }],
                     ..Default::default()
                 };

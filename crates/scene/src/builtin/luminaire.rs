@@ -16,7 +16,7 @@
 use super::geom::*;
 use crate::model::*;
 use crate::photometry::{Goniometric, PhotometryType};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::sync::Arc;
 
 /// The candela of each (horizontal, vertical) angle pair, horizontal plane by plane.
@@ -84,6 +84,85 @@ pub fn floodlight() -> Goniometric {
             (1500.0 * beam + 40.0) * h.cos().max(0.0)
         },
     )
+}
+
+/// Focal length of the reflector lamp's paraboloid (m).
+pub const REFLECTOR_FOCUS: f32 = 0.04;
+/// Radius of the reflector's opening (m).
+pub const REFLECTOR_RADIUS: f32 = 0.11;
+
+/// The canned lamp of Heidrich's Fig 7.4: a small emitting sphere at the focal point of a
+/// mirror paraboloid, behind a grille that splits the opening into 3 × 3 cells. Local frame:
+/// the lamp emits along +Z; the grille lies just inside the rim. Marked luminaire
+/// "reflector", placed at `position` aimed along `aim`.
+fn reflector_lamp(s: &mut Scene, position: Vec3, aim: Vec3) {
+    let mirror = s.add_material(Material {
+        name: "reflector_chrome".into(),
+        base_color: Vec4::ONE,
+        metallic: 1.0,
+        roughness: 0.0,
+        conductor: crate::model::Conductor::preset("chrome"),
+        double_sided: true,
+        ..Default::default()
+    });
+    let bulb = s.add_material(Material {
+        name: "bulb".into(),
+        base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        emissive: Vec3::new(1.0, 0.85, 0.65),
+        emissive_strength: 1200.0,
+        double_sided: true,
+        ..Material::diffuse("bulb", Vec3::ZERO)
+    });
+    let grille = s.add_material(Material {
+        double_sided: true,
+        ..Material::diffuse("grille", Vec3::splat(0.08))
+    });
+    let (f, r) = (REFLECTOR_FOCUS, REFLECTOR_RADIUS);
+    let rim = r * r / (4.0 * f);
+    let reflector = parametric("reflector", 48, 16, mirror, Vec2::ONE, |a, b| {
+        let (phi, rad) = (a * std::f32::consts::TAU, b * r);
+        Vec3::new(rad * phi.cos(), rad * phi.sin(), rad * rad / (4.0 * f))
+    });
+    let frame = Mat4::from_rotation_translation(
+        glam::Quat::from_rotation_arc(Vec3::Z, aim.normalize()),
+        position,
+    );
+    let mut put = |mesh: Mesh, local: Mat4| {
+        let name = mesh.name.clone();
+        let id = s.meshes.len();
+        s.meshes.push(mesh);
+        s.instances.push(Instance {
+            name,
+            mesh: id,
+            transform: frame * local,
+            nodes: vec!["reflector_lamp".into()],
+            luminaire: Some("reflector".into()),
+        });
+    };
+    put(reflector, Mat4::IDENTITY);
+    put(
+        sphere("bulb", 0.01, 24, 12, bulb),
+        Mat4::from_translation(Vec3::new(0.0, 0.0, f)),
+    );
+    // Two bars each way across the opening: 3 × 3 cells.
+    let (w, z) = (0.006, rim - 0.004);
+    let mut bars = vec![];
+    for k in [-1.0f32, 1.0] {
+        let o = k * r / 3.0;
+        bars.push(aabb_box(
+            "bar",
+            Vec3::new(o - w, -r, z - w),
+            Vec3::new(o + w, r, z + w),
+            grille,
+        ));
+        bars.push(aabb_box(
+            "bar",
+            Vec3::new(-r, o - w, z - w),
+            Vec3::new(r, o + w, z + w),
+            grille,
+        ));
+    }
+    put(merge("grille", &bars), Mat4::IDENTITY);
 }
 
 /// A goniometric light at `position` shining along `direction`, its C0 axis towards `c0`
@@ -199,6 +278,7 @@ pub fn luminaire() -> Scene {
         c(1.0, -0.45, -1.0),
         c(1.0, 0.0, 1.0),
     ));
+    reflector_lamp(&mut s, c(1.5, 2.55, 1.9), c(-0.75, -1.0, -1.2));
     s.cameras.push(Camera::look_at(
         "luminaire_camera",
         c(1.2, 1.6, 2.35),

@@ -332,6 +332,7 @@ fn room() -> Scene {
         mesh: pillar_mesh,
         transform: Mat4::from_translation(Vec3::new(0.9, 0.0, 1.1)),
         nodes: vec![],
+        luminaire: None,
     });
     add_clear_day(&mut s, Vec3::new(-0.75, -0.55, -0.25));
     s.cameras.push(Camera::look_at(
@@ -474,6 +475,7 @@ fn atrium() -> Scene {
                 mesh,
                 transform: Mat4::from_translation(Vec3::new(p.x, y, p.y)),
                 nodes: vec![],
+                luminaire: None,
             });
         }
     }
@@ -544,6 +546,7 @@ fn shadows() -> Scene {
             mesh: pillar,
             transform: Mat4::from_translation(Vec3::new(p.0, 0.0, p.1)),
             nodes: vec![],
+            luminaire: None,
         });
     }
     let cube = s.add_mesh(
@@ -563,6 +566,7 @@ fn shadows() -> Scene {
             Vec3::new(1.4, 0.8, 1.2),
         ),
         nodes: vec![],
+        luminaire: None,
     });
     s.instances.push(Instance {
         name: "box_3".into(),
@@ -573,6 +577,7 @@ fn shadows() -> Scene {
             Vec3::new(-1.5, 0.35, 0.8),
         ),
         nodes: vec![],
+        luminaire: None,
     });
     s.add_mesh(
         sphere("ball", 0.5, 48, 24, stone),
@@ -767,6 +772,7 @@ fn bush() -> Scene {
                 trunk_top,
             ),
             nodes: vec![],
+            luminaire: None,
         });
         tips.push(tip);
     }
