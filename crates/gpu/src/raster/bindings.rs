@@ -1,7 +1,8 @@
 //! The renderer's bind-group layouts, named by role, and typed helpers for their entries.
 //!
 //! Groups: `frame` (0: frame uniforms, lights, shadow views, the per-pass slot, the
-//! goniometric lights' candela tables at 16), the
+//! goniometric lights' candela tables at 16, a canned light's slices and sampler at 17–18),
+//! the
 //! material (1, `gpu_scene`), `lighting` (2: shadow maps, then the ambient source's resources),
 //! and the full-screen inputs (3: G-buffer, tonemap source, sky).
 
@@ -102,6 +103,8 @@ impl GroupLayouts {
                 storage(2),
                 buffer(3, wgpu::BufferBindingType::Uniform, true),
                 texel_texture(16, Dim::D2Array),
+                filtered_texture(17, Dim::D2Array),
+                sampler(18, S::Filtering),
             ],
         );
         // Shadow maps (0–2), the ambient source's bindings (3..), the environment term's (20–23).

@@ -57,6 +57,9 @@ struct FrameBuffers {
     passes: wgpu::Buffer,
     /// The goniometric lights' candela tables.
     profiles: wgpu::TextureView,
+    /// A canned light's (s,t) slices and their sampler.
+    slab: wgpu::TextureView,
+    slab_sampler: wgpu::Sampler,
 }
 
 impl FrameBuffers {
@@ -65,6 +68,7 @@ impl FrameBuffers {
         queue: &wgpu::Queue,
         frame: &FrameUniforms,
         ls: &LightSet,
+        canned: Option<&super::CannedLight>,
     ) -> FrameBuffers {
         let init = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -116,6 +120,8 @@ impl FrameBuffers {
                 queue,
                 &ls.profiles.iter().map(|p| &**p).collect::<Vec<_>>(),
             ),
+            slab: crate::canned::slab_texture(device, queue, canned.map(|c| &*c.slab)),
+            slab_sampler: crate::canned::slab_sampler(device),
         }
     }
 }
@@ -249,6 +255,8 @@ fn groups(
                 entry(2, buffers.views.as_entire_binding()),
                 entry(3, pass_slot),
                 entry(16, R::TextureView(&buffers.profiles)),
+                entry(17, R::TextureView(&buffers.slab)),
+                entry(18, R::Sampler(&buffers.slab_sampler)),
             ],
         ),
         lighting,
@@ -388,7 +396,13 @@ impl Renderer {
             ls.light_pos.len(),
             sun.as_ref().map(|(_, e)| e),
         );
-        let buffers = FrameBuffers::new(device, &ctx.queue, &frame, &ls);
+        let buffers = FrameBuffers::new(
+            device,
+            &ctx.queue,
+            &frame,
+            &ls,
+            settings.light_field.as_ref(),
+        );
         let kind = source.kind();
         let layouts = GroupLayouts::new(device, &kind.layout_entries());
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {

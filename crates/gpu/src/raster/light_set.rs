@@ -146,10 +146,50 @@ impl LightSet {
             set.light_pos.push(lp);
             set.light_radius.push(radius);
         }
+        if let Some(c) = &s.light_field {
+            set.add_canned(c, s, bounds);
+        }
         if set.lights.is_empty() {
             set.lights.push(GpuLight::default());
         }
         set
+    }
+
+    /// A canned light's records (`canned.rs`), sharing one cube of shadow views at its
+    /// window's centre.
+    fn add_canned(&mut self, c: &super::CannedLight, s: &RasterSettings, bounds: (Vec3, Vec3)) {
+        let slab = &*c.slab;
+        // The cube sits a little in front of the window, so that nothing at the window casts
+        // a shadow over the whole slab.
+        let eye = slab.centre + slab.normal() * (1e-3 * slab.half.max_element());
+        let point = Light {
+            name: "canned light".into(),
+            kind: LightKind::Point,
+            color: Vec3::ONE,
+            intensity: 1.0,
+            position: eye,
+            direction: slab.normal(),
+            range: None,
+        };
+        let first = self.views.len() as u32;
+        let li = self.lights.len();
+        if s.shadows.map() {
+            let far = lights::shadow_far(&point, None, bounds);
+            self.views
+                .extend(lights::point_views(&point, far, s.shadow_size));
+            self.view_light.extend(std::iter::repeat_n(li, 6));
+        }
+        for mut g in crate::canned::gpu_lights(c) {
+            if s.shadows.map() {
+                g.shadow_first = first;
+                g.shadow_count = 6;
+            }
+            g.position = eye.to_array();
+            self.lights.push(g);
+            self.light_pos.push(LightPos::Point(eye));
+            self.light_radius.push(None);
+            self.planar.push(None);
+        }
     }
 
     /// Light `li`'s shadow-map views (spot, cube faces or cascades), recorded in `g`.

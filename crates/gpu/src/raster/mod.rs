@@ -34,8 +34,9 @@ mod targets;
 
 pub use ambient::{LightmapInput, SourceKind};
 pub use settings::{
-    Ambient, BadAmbient, EnvDiffuse, EnvMapKind, EnvPrefilter, FrameTimes, MAX_AREA_LIGHTS,
-    RasterError, RasterSettings, Refraction, RenderPath, ShadowMethod, projection,
+    Ambient, BadAmbient, CannedLight, CannedPasses, EnvDiffuse, EnvMapKind, EnvPrefilter,
+    FrameTimes, MAX_AREA_LIGHTS, RasterError, RasterSettings, Refraction, RenderPath, ShadowMethod,
+    projection,
 };
 
 use crate::GpuContext;

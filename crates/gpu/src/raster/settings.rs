@@ -216,6 +216,29 @@ pub struct RasterSettings {
     /// Texels of the environment map's level 0 over all faces (equal memory across
     /// parameterisations).
     pub env_texels: u32,
+    /// A canned light source (Heidrich ch. 7) added to the scene's lights (`canned.rs`).
+    pub light_field: Option<CannedLight>,
+}
+
+/// How a canned light is drawn (§7.2.2): one additive pass per (u,v) grid point, each a spot
+/// light with a projective texture of its (s,t) slice, or one pass whose shader sums every
+/// grid point from a texture array.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CannedPasses {
+    PerPoint,
+    Array,
+}
+
+lightlab_core::named_enum!(CannedPasses, "canned-light pass scheme", {
+    PerPoint => "per-point",
+    Array => "array",
+});
+
+/// A light slab to light the scene with.
+#[derive(Clone, Debug)]
+pub struct CannedLight {
+    pub slab: std::sync::Arc<lightlab_core::light_slab::LightSlab>,
+    pub passes: CannedPasses,
 }
 
 impl Default for RasterSettings {
@@ -251,6 +274,7 @@ impl Default for RasterSettings {
             sky_occlusion: super::ambient::SKY_OCCLUSION_DIRECTIONS,
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
+            light_field: None,
         }
     }
 }

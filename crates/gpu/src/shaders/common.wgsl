@@ -71,7 +71,8 @@ struct LpvAmbientUniforms {
 // position − area_offset·direction, normal direction, corners centre ± edge_u ± edge_v,
 // radiance color, area intensity), 4 goniometric (a measured lamp: a point light whose
 // intensity is scaled by the candela towards each direction, `profile_candela`; edge_u is
-// its C0 axis). Spot cones as cosines.
+// its C0 axis), 5 one grid point of a canned light, 6 a whole canned light (`canned.rs`: the
+// fields' meanings). Spot cones as cosines.
 // attenuation: 0 inverse square (glTF range window), 1..4 Fuchs (2005) §4.1 atten₁..atten₄.
 struct GpuLight {
     position: vec3<f32>,
@@ -378,6 +379,47 @@ fn profile_lookup(layer: u32, nadir: vec3<f32>, c0: vec3<f32>, d: vec3<f32>) -> 
     return mix(mix(a00, a10, tu), mix(a01, a11, tu), tv);
 }
 
+// A canned light's (s,t) slices, one layer per (u,v) grid point (`canned.rs`).
+@group(0) @binding(17) var slab_slices: texture_2d_array<f32>;
+@group(0) @binding(18) var slab_sampler: sampler;
+
+// Grid point `layer` of a canned light: its position on the window.
+fn slab_point(li: GpuLight, layer: u32) -> vec3<f32> {
+    let nu = li.two_sided & 0xffffu;
+    let nv = li.two_sided >> 16u;
+    let iu = layer / nv;
+    let iv = layer % nv;
+    let a = (f32(iu) + 0.5) / f32(nu) * 2.0 - 1.0;
+    let b = (f32(iv) + 0.5) / f32(nv) * 2.0 - 1.0;
+    return li.position + li.edge_u * (a * li.cascade_ends.x) + li.edge_v * (b * li.cascade_ends.y);
+}
+
+// Irradiance at normal incidence (RGB) at `x` from grid point `layer` at `p` (§7.2.2, Eq 7.4):
+// a spot light of intensity A·cos θ' (cutoff 90°, exponent 1) × its slice's radiance towards x.
+fn slab_irradiance(li: GpuLight, p: vec3<f32>, layer: u32, x: vec3<f32>) -> vec3<f32> {
+    let d = x - p;
+    let r2 = max(dot(d, d), 1e-12);
+    let dn = dot(d, li.direction);
+    if dn <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    var st: vec2<f32>;
+    if li.area_offset > 0.0 {
+        // The far plane at distance area_offset: where the ray crosses it.
+        let q = p + d * (li.area_offset / dn) - (li.position + li.direction * li.area_offset);
+        st = vec2<f32>(dot(q, li.edge_u), dot(q, li.edge_v));
+    } else {
+        st = vec2<f32>(dot(d, li.edge_u), dot(d, li.edge_v)) / dn;
+    }
+    let uv = (st / li.cascade_ends.zw + 1.0) * 0.5;
+    if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
+        return vec3<f32>(0.0);
+    }
+    let l = textureSampleLevel(slab_slices, slab_sampler, uv, layer, 0.0).rgb;
+    let cos_p = dn * inverseSqrt(r2);
+    return l * (li.intensity * cos_p / r2);
+}
+
 // Incident irradiance at normal incidence (RGB) and the unit direction to the light.
 fn light_incidence(li: GpuLight, p: vec3<f32>) -> vec4<f32> {
     if li.kind == 2u {
@@ -499,9 +541,26 @@ fn shade_light(s: Surface, li: GpuLight, v: vec3<f32>) -> vec3<f32> {
     if li.kind == 3u {
         return shade_area(s, li, v);
     }
-    let l = light_dir(li, s.p);
-    let e = light_incidence(li, s.p).x;
-    if e <= 0.0 {
+    if li.kind == 5u {
+        let p = slab_point(li, li.profile);
+        return shade_from(s, li, v, normalize(p - s.p), slab_irradiance(li, p, li.profile, s.p));
+    }
+    if li.kind == 6u {
+        var sum = vec3<f32>(0.0);
+        let n = (li.two_sided & 0xffffu) * (li.two_sided >> 16u);
+        for (var k = 0u; k < n; k++) {
+            let p = slab_point(li, k);
+            sum += shade_from(s, li, v, normalize(p - s.p), slab_irradiance(li, p, k, s.p));
+        }
+        return sum;
+    }
+    return shade_from(s, li, v, light_dir(li, s.p), li.color * light_incidence(li, s.p).x);
+}
+
+// Radiance towards the viewer from light arriving along unit `l` with irradiance `e` (RGB) at
+// normal incidence.
+fn shade_from(s: Surface, li: GpuLight, v: vec3<f32>, l: vec3<f32>, e: vec3<f32>) -> vec3<f32> {
+    if max(e.x, max(e.y, e.z)) <= 0.0 {
         return vec3<f32>(0.0);
     }
     let ngl = dot(s.ng, l);
@@ -516,7 +575,7 @@ fn shade_light(s: Surface, li: GpuLight, v: vec3<f32>) -> vec3<f32> {
         // Thin diffuse transmission: light from behind leaves towards the viewer.
         c = s.diffuse * (s.transmission / PI) * max(-dot(s.n, l), 0.0);
     }
-    return c * li.color * e;
+    return c * e;
 }
 
 // `v` normalised, or `fallback` where `v` is (nearly) zero: opposed vertex normals, a flat

@@ -179,8 +179,8 @@ fn sky_ambient(s: Surface) -> vec3<f32> {
 
 fn shadow_view_index(li: GpuLight, p: vec3<f32>) -> u32 {
     var i = li.shadow_first;
-    // Point, area and goniometric lights: six cube faces around the light's position.
-    if li.kind == 0u || li.kind == 3u || li.kind == 4u {
+    // Point, area, goniometric and canned lights: six cube faces around the light's position.
+    if li.kind == 0u || li.kind >= 3u {
         let d = p - li.position;
         let a = abs(d);
         if a.x >= a.y && a.x >= a.z {
