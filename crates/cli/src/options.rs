@@ -165,6 +165,16 @@ pub struct TechniqueArgs {
     pub lpv: LpvArgs,
     #[command(flatten)]
     pub lens: LensArgs,
+    /// A canned light (a light slab folder, `bake --method light-field`) to light the scene
+    /// with in place of its luminaire's geometry: the GPU techniques draw it as projective-
+    /// texture spot lights (Heidrich §7.2.2), `reference` and `direct` as the slab's micro
+    /// lights (§7.2.1). `canned-light` without it bakes the scene's first luminaire first.
+    #[arg(long, value_name = "DIR")]
+    pub light_field: Option<PathBuf>,
+    /// How the GPU draws a canned light: `per-point` (one additive pass per (u,v) grid point,
+    /// as the seed) or `array` (one pass summing every grid point from a texture array).
+    #[arg(long, default_value = "per-point")]
+    pub light_field_passes: lightlab_gpu::raster::CannedPasses,
     /// Pose an animated scene (`prt-dynamic`, or a glTF file with an animation) at frame K,
     /// in the reference and in every technique alike. The light-map and SH techniques bake
     /// the rest pose and move the objects: a moving object's SH transfer holds its own
@@ -666,6 +676,75 @@ pub struct BakeArgs {
     /// (Fuchs §5.6; `indices-K.bin` + `representatives.bin`, read by `shl-compressed`).
     #[arg(long)]
     pub compress: Option<usize>,
+    #[command(flatten)]
+    pub slab: SlabArgs,
+}
+
+/// `--method light-field`: the light slab of a luminaire (Heidrich ch. 7).
+#[derive(Args, Clone, Debug)]
+pub struct SlabArgs {
+    /// The luminaire to bake (glTF `extras.lightlab.luminaire`); default: the scene's first.
+    #[arg(long)]
+    pub luminaire: Option<String>,
+    /// Grid points on the (u,v) window near the lamp, `NxM`.
+    #[arg(long, default_value = "8x8", value_parser = parse_grid)]
+    pub slab_uv: [usize; 2],
+    /// Samples over the (s,t) window, `NxM`.
+    #[arg(long, default_value = "64x64", value_parser = parse_grid)]
+    pub slab_st: [usize; 2],
+    /// Where the (s,t) window lies: `inf` (directions; its half-size in slopes) or a distance
+    /// in metres along the lamp's axis (a plane; its half-size in metres).
+    #[arg(long, default_value = "inf")]
+    pub slab_far: String,
+    /// Half the (s,t) window: slopes at infinity (3 ≈ 71.6° off the axis), metres on a plane.
+    #[arg(long, default_value_t = 3.0)]
+    pub slab_far_half: f32,
+    /// Paths per (s,t) sample, jittered over its cell.
+    #[arg(long, default_value_t = 16)]
+    pub slab_samples: u32,
+}
+
+impl Default for SlabArgs {
+    fn default() -> Self {
+        SlabArgs {
+            luminaire: None,
+            slab_uv: [8, 8],
+            slab_st: [64, 64],
+            slab_far: "inf".into(),
+            slab_far_half: 3.0,
+            slab_samples: 16,
+        }
+    }
+}
+
+impl SlabArgs {
+    /// The far window's placement.
+    pub fn far(&self) -> anyhow::Result<lightlab_core::light_slab::Far> {
+        use lightlab_core::light_slab::Far;
+        if self.slab_far == "inf" {
+            return Ok(Far::Infinity);
+        }
+        match self.slab_far.parse::<f32>() {
+            Ok(d) if d.is_finite() && d > 0.0 => Ok(Far::Plane(d)),
+            _ => anyhow::bail!(
+                "--slab-far '{}' must be `inf` or a positive distance in metres",
+                self.slab_far
+            ),
+        }
+    }
+}
+
+/// `NxM` with N and M in 1…1024.
+fn parse_grid(s: &str) -> Result<[usize; 2], String> {
+    let bad = || format!("'{s}' must be NxM, two whole numbers from 1 to 1024 (e.g. 8x8)");
+    let (a, b) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let n = |t: &str| {
+        t.trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|v| (1..=1024).contains(v))
+    };
+    Ok([n(a).ok_or_else(bad)?, n(b).ok_or_else(bad)?])
 }
 
 impl Default for BakeArgs {
@@ -691,6 +770,7 @@ impl Default for BakeArgs {
             no_detail: false,
             detail_cage: 0.05,
             compress: None,
+            slab: SlabArgs::default(),
         }
     }
 }

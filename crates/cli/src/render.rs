@@ -9,9 +9,13 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightlab_core::color::ToneMap;
 use lightlab_core::image::{Image, LdrSettings};
+use lightlab_core::light_slab::{LightSlab, SlabEmitter};
 use lightlab_scene::Scene;
+use lightlab_trace::WindowEmitter;
 use lightlab_trace::{Accel, PathTracer, RenderSettings};
+use std::borrow::Cow;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 #[derive(Args)]
@@ -82,16 +86,41 @@ fn path_settings(technique: Technique, settings: &RenderSettings) -> RenderSetti
     s
 }
 
+/// The scene the path tracer renders and its window lights: each luminaire's geometry traced
+/// through its window (the paths inside a lamp that room paths would almost never find), or
+/// replaced by the canned light `light_field` (the slab's micro lights, Heidrich §7.2.1).
+pub fn windowed<'a>(
+    scene: &'a Scene,
+    light_field: Option<&Arc<LightSlab>>,
+) -> (Cow<'a, Scene>, Vec<Arc<dyn WindowEmitter>>) {
+    use lightlab_trace::luminaire;
+    match light_field {
+        Some(slab) => (
+            Cow::Owned(luminaire::without_luminaires(scene)),
+            vec![Arc::new(SlabEmitter::new(slab.clone()))],
+        ),
+        None if luminaire::names(scene).is_empty() => (Cow::Borrowed(scene), vec![]),
+        None => {
+            let (room, lamps) = luminaire::prepare(scene, crate::techniques::canned::LAMP_DEPTH);
+            (Cow::Owned(room), lamps)
+        }
+    }
+}
+
 /// Render with the reference path tracer (technique `reference` or `direct`), with a progress
 /// bar on stderr.
 pub fn render_reference(
     scene: &Scene,
     technique: Technique,
     settings: &RenderSettings,
+    light_field: Option<&Arc<LightSlab>>,
 ) -> Result<Image> {
     let s = path_settings(technique, settings);
+    let (scene, windows) = windowed(scene, light_field);
+    let scene = &*scene;
     let accel = Accel::new(scene);
-    let pt = PathTracer::new(scene, &accel);
+    let mut pt = PathTracer::new(scene, &accel);
+    pt.windows = windows;
     let bar = ProgressBar::new(s.height as u64);
     bar.set_style(
         ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} rows, {elapsed} (eta {eta})")
@@ -164,7 +193,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
         return render_shard(&a, &scene, &settings, shard);
     }
     let t0 = Instant::now();
-    let img = render_reference(&scene, a.technique, &settings)?;
+    let slab = canned_slab(&a)?;
+    let img = render_reference(&scene, a.technique, &settings, slab.as_ref())?;
     let secs = t0.elapsed().as_secs_f64();
     write_output(&a, &img)?;
     let paths = settings.width as f64 * settings.height as f64 * settings.spp as f64;
@@ -212,6 +242,19 @@ fn depth_range(a: &RenderArgs) -> Result<(u32, u32)> {
     }
 }
 
+/// The light slab of `--light-field`, for the path tracer.
+fn canned_slab(a: &RenderArgs) -> Result<Option<Arc<LightSlab>>> {
+    a.gpu
+        .light_field
+        .as_ref()
+        .map(|dir| {
+            LightSlab::read(dir)
+                .map(Arc::new)
+                .with_context(|| format!("reading the light slab in {}", dir.display()))
+        })
+        .transpose()
+}
+
 /// `render --shard I/N`: the shard's rows into a part folder.
 fn render_shard(
     a: &RenderArgs,
@@ -235,8 +278,11 @@ fn render_shard(
         tonemap: a.tonemap.name().into(),
         camera_model: settings.lens.describe(),
     };
-    let accel = Accel::new(scene);
-    let pt = PathTracer::new(scene, &accel);
+    let slab = canned_slab(a)?;
+    let (traced, windows) = windowed(scene, slab.as_ref());
+    let accel = Accel::new(&traced);
+    let mut pt = PathTracer::new(&traced, &accel);
+    pt.windows = windows;
     let part = render_part(
         &pt,
         &s,

@@ -14,6 +14,7 @@ pub enum Technique {
     Phong,
     PhongShadowVolumes,
     PhongShadowMaps,
+    CannedLight,
     Lightmap,
     LightmapPhong,
     PrtVertex,
@@ -96,6 +97,7 @@ pub const REGISTRY: &[Entry] = {
         entry(T::Phong, "phong", F::Phong, "Phong lighting, no shadows (Fuchs §4.1)"),
         entry(T::PhongShadowVolumes, "phong-shadow-volumes", F::Phong, "Phong with stencil shadow volumes (Fuchs §4.4)"),
         entry(T::PhongShadowMaps, "phong-shadow-maps", F::Phong, "Phong with shadow maps (Heidrich ch. 6)"),
+        entry(T::CannedLight, "canned-light", F::Phong, "shadow-mapped Phong with the luminaire as a light slab (Heidrich ch. 7)"),
         entry(T::Lightmap, "lightmap", F::Lightmap, "baked light only (Fuchs §3.4)"),
         entry(T::LightmapPhong, "lightmap+phong", F::Lightmap, "baked indirect light + real-time lights with shadow volumes"),
         entry(T::PrtVertex, "prt-vertex", F::Sh, "per-vertex PRT (McKenzie Chapter ch. 4)"),
@@ -172,8 +174,13 @@ impl Technique {
             (T::Phong, None) => S::None,
             (T::PhongShadowVolumes | T::LightmapPhong, None | Some(V::Zfail)) => S::VolumesZFail,
             (T::PhongShadowVolumes | T::LightmapPhong, Some(V::Zpass)) => S::VolumesZPass,
-            (T::PhongShadowMaps | T::Lpv | T::LpvFaithful, None | Some(V::Depth)) => S::Map,
-            (T::PhongShadowMaps | T::Lpv | T::LpvFaithful, Some(V::Linear)) => S::MapLinear,
+            (
+                T::PhongShadowMaps | T::CannedLight | T::Lpv | T::LpvFaithful,
+                None | Some(V::Depth),
+            ) => S::Map,
+            (T::PhongShadowMaps | T::CannedLight | T::Lpv | T::LpvFaithful, Some(V::Linear)) => {
+                S::MapLinear
+            }
             (T::PhongShadowMaps | T::Lpv | T::LpvFaithful, Some(V::Planar)) => S::Planar,
             (T::Lightmap | T::Normals, None) => S::None,
             (t, None) if t.family() == Family::Sh => S::None,

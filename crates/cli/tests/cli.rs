@@ -220,10 +220,15 @@ fn compare_rejects_different_sizes_and_unreadable_files() {
 }
 
 #[test]
-fn unbuilt_methods_exit_with_code_2() {
+fn bake_methods_that_do_not_apply_say_what_to_do() {
+    // A light slab needs a luminaire: the error says how to mark one.
     let o = lightlab(&["bake", "--scene", "cornell", "--method", "light-field"]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("not implemented yet"), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("extras.lightlab.luminaire"),
+        "{}",
+        stderr(&o)
+    );
     // Hierarchical PRT is a technique, not a bake: the error says what to do instead.
     let o = lightlab(&["bake", "--scene", "cornell", "--method", "prt-hierarchical"]);
     assert_eq!(o.status.code(), Some(1));

@@ -275,6 +275,10 @@ fn check_attribute_indices(path: &Path, v: &Value) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// A node to read: its parent's world transform, its depth, the names above it and the
+/// luminaire it belongs to.
+type NodeVisit<'a> = (gltf::Node<'a>, Mat4, usize, Vec<String>, Option<String>);
+
 struct Importer<'a> {
     path: &'a Path,
     opts: LoadOptions,
@@ -1030,7 +1034,7 @@ impl Importer<'_> {
     /// error rather than a stack overflow.
     fn nodes(&mut self, scene: &gltf::Scene, default_material: usize) -> Result<(), SceneError> {
         let mut seen = vec![false; self.doc.nodes().len()];
-        let mut stack: Vec<(gltf::Node, Mat4, usize, Vec<String>, Option<String>)> = scene
+        let mut stack: Vec<NodeVisit> = scene
             .nodes()
             .map(|n| (n, Mat4::IDENTITY, 1, vec![], None))
             .collect();

@@ -4,6 +4,7 @@
 //! through [`build`]; each family's module (`phong`, `lightmap`, `sh`, `lpv`) reads its own
 //! options.
 
+pub mod canned;
 mod lens;
 pub mod lightmap;
 mod lpv;
@@ -88,14 +89,32 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
         }
         _ => *req,
     };
+    if req.args.light_field.is_some() && req.technique.family() != Family::Phong {
+        bail!(
+            "--light-field lights the Phong techniques (phong, phong-shadow-volumes, \
+             phong-shadow-maps, canned-light), reference and direct; not '{}'",
+            req.technique
+        );
+    }
     let mut sh_light = None;
     let renderer = match req.technique.family() {
         Family::PathTraced => bail!("'{}' is not a GPU technique", req.technique),
         Family::Phong => {
             let a = &req.args.raster;
             let shadows = req.technique.shadows(a.shadow_variant)?;
-            let s = a.settings(shadows, req.width, req.height, req.camera)?;
-            Renderer::new(ctx, req.scene, s)?
+            let mut s = a.settings(shadows, req.width, req.height, req.camera)?;
+            match canned::light(req.scene, req.technique, req.args)? {
+                Some(slab) => {
+                    // The slab replaces the luminaire's geometry (and its light).
+                    s.light_field = Some(lightlab_gpu::raster::CannedLight {
+                        slab,
+                        passes: req.args.light_field_passes,
+                    });
+                    let room = lightlab_trace::luminaire::without_luminaires(req.scene);
+                    Renderer::new(ctx, &room, s)?
+                }
+                None => Renderer::new(ctx, req.scene, s)?,
+            }
         }
         Family::Lightmap => {
             let lm = lightmap::lightmaps(req, bakes)?;

@@ -223,8 +223,9 @@ pub struct RasterSettings {
 /// How a canned light is drawn (§7.2.2): one additive pass per (u,v) grid point, each a spot
 /// light with a projective texture of its (s,t) slice, or one pass whose shader sums every
 /// grid point from a texture array.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum CannedPasses {
+    #[default]
     PerPoint,
     Array,
 }
