@@ -61,6 +61,11 @@ fn small_sh(a: &mut TechniqueArgs) {
     a.sh.sh_representatives = 1024;
 }
 
+fn small_slab(a: &mut TechniqueArgs) {
+    a.raster.ambient = Ambient::None;
+    a.bake.slab.slab_samples = 4;
+}
+
 fn lpv_indirect(a: &mut TechniqueArgs) {
     a.raster.ambient = Ambient::None;
     a.lpv.debug_view = DebugView::Indirect;
@@ -92,6 +97,7 @@ const ROWS: &[Row] = {
         Row { technique: T::PhongShadowMaps, scene: "cornell", reference: Direct, budget: 0.012, options: no_ambient },
         Row { technique: T::PhongShadowVolumes, scene: "shadows", reference: Direct, budget: 0.002, options: no_ambient },
         Row { technique: T::PhongShadowMaps, scene: "shadows", reference: Direct, budget: 0.002, options: no_ambient },
+        Row { technique: T::CannedLight, scene: "luminaire", reference: Direct, budget: 0.005, options: small_slab },
         Row { technique: T::Lightmap, scene: "cornell", reference: Bounces(16), budget: 0.015, options: small_lightmap },
         Row { technique: T::LightmapPhong, scene: "shadows", reference: Bounces(16), budget: 0.003, options: small_lightmap },
         Row { technique: T::PrtVertex, scene: "prt", reference: Bounces(1), budget: 0.6, options: small_sh },
@@ -144,6 +150,9 @@ fn normals(scene: &Scene, accel: &Accel) -> Image {
 
 /// The path tracer's image of `scene` for a kind of reference.
 fn reference(scene: &Scene, kind: Reference) -> Image {
+    // Luminaires traced through their windows, as `render` traces them.
+    let (scene, windows) = crate::render::windowed(scene, None);
+    let scene = &*scene;
     let accel = Accel::new(scene);
     let (min_depth, max_depth, spp) = match kind {
         Reference::Direct => (0, 1, 256),
@@ -161,8 +170,9 @@ fn reference(scene: &Scene, kind: Reference) -> Image {
         camera: 0,
         lens: Default::default(),
     };
-    PathTracer::new(scene, &accel)
-        .render(&settings, &|_, _| true)
+    let mut pt = PathTracer::new(scene, &accel);
+    pt.windows = windows;
+    pt.render(&settings, &|_, _| true)
         .expect("the reference renders")
 }
 

@@ -93,6 +93,20 @@ pub enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// A canned light's error, memory and frame time against its slab's resolution (the
+    /// scene's first luminaire alone, direct light).
+    Canned {
+        #[arg(long, default_value = "luminaire")]
+        scene: String,
+        #[command(flatten)]
+        slab: crate::options::SlabArgs,
+        #[command(flatten)]
+        canned: crate::bench_canned::CannedBenchArgs,
+        #[command(flatten)]
+        load: LoadArgs,
+        #[arg(long)]
+        json: bool,
+    },
     /// Milliseconds per pass of a GPU technique (GPU timestamps where the adapter has them).
     Frame {
         #[arg(long)]
@@ -140,6 +154,13 @@ pub fn run(cmd: BenchCommand) -> Result<()> {
             load,
             json,
         } => crate::bench_hprt::run((&scene, &load), &bake, &hprt, json),
+        BenchCommand::Canned {
+            scene,
+            slab,
+            canned,
+            load,
+            json,
+        } => crate::bench_canned::run((&scene, &load), &slab, &canned, json),
         BenchCommand::Frame {
             scene,
             technique,

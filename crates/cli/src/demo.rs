@@ -188,7 +188,12 @@ fn demo_techniques(scene: &str) -> Vec<Technique> {
     if matches!(scene, "bush" | "cornell" | "room" | "atrium" | "luminaire") {
         families.push(Family::Lpv);
     }
-    families.into_iter().flat_map(Technique::of).collect()
+    families
+        .into_iter()
+        .flat_map(Technique::of)
+        // Only `luminaire` has a lamp to can.
+        .filter(|t| *t != Technique::CannedLight || scene == "luminaire")
+        .collect()
 }
 
 /// Light-map texel density of the scenes light-maps are baked for.

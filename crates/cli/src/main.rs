@@ -11,6 +11,7 @@
 mod acceptance;
 mod bake_cmd;
 mod bench;
+mod bench_canned;
 mod bench_hprt;
 mod check;
 mod demo;

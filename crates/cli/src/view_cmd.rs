@@ -52,7 +52,12 @@ pub struct ViewArgs {
 pub fn view(a: &ViewArgs) -> Result<()> {
     let mut scene = load_scene(&a.scene, &a.load)?;
     apply_brdf(&mut scene, a.gpu.raster.brdf);
-    let techniques: Vec<Technique> = Technique::gpu().collect();
+    // `canned-light` needs a luminaire to bake, or a slab.
+    let canned =
+        a.gpu.light_field.is_some() || !lightlab_trace::luminaire::names(&scene).is_empty();
+    let techniques: Vec<Technique> = Technique::gpu()
+        .filter(|t| canned || *t != Technique::CannedLight)
+        .collect();
     let first = techniques
         .iter()
         .position(|t| *t == a.technique)

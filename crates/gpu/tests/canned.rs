@@ -1,9 +1,10 @@
-//! Canned light sources on the GPU (Heidrich §7.2.2): the reflector lamp of the built-in
-//! `luminaire` baked into an 8 × 8 × 64 × 64 slab and drawn as projective-texture spot lights,
-//! against the path tracer tracing the lamp's real geometry; direct light of the lamp only.
+//! Canned light sources (Heidrich ch. 7): the reflector lamp of the built-in `luminaire` baked
+//! into an 8 × 8 × 64 × 64 slab, drawn by the GPU as projective-texture spot lights (§7.2.2)
+//! and by the path tracer as micro lights (§7.2.1), against the path tracer tracing the lamp's
+//! real geometry through its window; direct light of the lamp only.
 
 use glam::Vec2;
-use lightlab_core::light_slab::{Far, LightSlab};
+use lightlab_core::light_slab::{Far, LightSlab, SlabEmitter};
 use lightlab_core::metrics::relmse;
 use lightlab_gpu::raster::{
     Ambient, CannedLight, CannedPasses, RasterSettings, Renderer, ShadowMethod,
@@ -49,20 +50,21 @@ fn the_canned_reflector_lamp_matches_its_real_geometry() {
     let room = luminaire::without_luminaires(&scene);
     let (w, h) = (64, 48);
     let accel = Accel::new(&room);
-    let mut pt = PathTracer::new(&room, &accel);
-    pt.windows = vec![lamp.clone()];
-    let real = pt
-        .render(
-            &RenderSettings {
-                width: w,
-                height: h,
-                spp: 1024,
-                max_depth: 1,
-                ..Default::default()
-            },
-            &|_, _| true,
-        )
-        .unwrap();
+    let traced = |light: Arc<dyn lightlab_trace::WindowEmitter>| {
+        let mut pt = PathTracer::new(&room, &accel);
+        pt.windows = vec![light];
+        let s = RenderSettings {
+            width: w,
+            height: h,
+            spp: 1024,
+            max_depth: 1,
+            ..Default::default()
+        };
+        pt.render(&s, &|_, _| true).unwrap()
+    };
+    let real = traced(lamp.clone());
+    let mean = real.data.iter().map(|p| p.x).sum::<f32>() / real.data.len() as f32;
+    assert!(mean > 0.003, "the lamp lights the room: {mean}");
     let slab = Arc::new(luminaire::bake_slab(
         &lamp,
         [8, 8],
@@ -75,6 +77,10 @@ fn the_canned_reflector_lamp_matches_its_real_geometry() {
     // 2 × 2 supersampling, as the demo renders.
     let per_point = gpu(&room, &slab, CannedPasses::PerPoint, 2 * w, 2 * h).downsample(2);
     let array = gpu(&room, &slab, CannedPasses::Array, 2 * w, 2 * h).downsample(2);
+    let emitter = traced(Arc::new(SlabEmitter::new(slab.clone())));
+    let e_pt = relmse(&emitter, &real).unwrap();
+    println!("the slab as the path tracer's emitter against the real lamp: relMSE {e_pt:.5}");
+    assert!(e_pt <= 0.005, "{e_pt}");
     let same = relmse(&array, &per_point).unwrap();
     let e = relmse(&per_point, &real).unwrap();
     println!(
