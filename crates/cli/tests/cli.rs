@@ -21,7 +21,8 @@ fn scenes_lists_one_name_per_line() {
             "prt",
             "spheres",
             "atrium",
-            "prt-dynamic"
+            "prt-dynamic",
+            "luminaire"
         ]
     );
 }
