@@ -236,6 +236,18 @@ fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
             bounces: Some(1),
             ..Default::default()
         },
+        // `canned-light`'s slab of the luminaire.
+        Family::Phong => BakeArgs {
+            slab: crate::options::SlabArgs {
+                slab_samples: match quality {
+                    Quality::Preview => 2,
+                    Quality::Low => 8,
+                    Quality::High => 32,
+                },
+                ..Default::default()
+            },
+            ..Default::default()
+        },
         _ => BakeArgs::default(),
     };
     TechniqueArgs {
