@@ -17,7 +17,6 @@
 use crate::raster::{CannedLight, CannedPasses};
 use crate::uniforms::GpuLight;
 use lightlab_core::light_slab::{Far, LightSlab};
-use wgpu::util::DeviceExt;
 
 /// The light records of `c`: N_u × N_v of kind 5, or one of kind 6.
 pub fn gpu_lights(c: &CannedLight) -> Vec<GpuLight> {
@@ -49,62 +48,33 @@ pub fn gpu_lights(c: &CannedLight) -> Vec<GpuLight> {
     }
 }
 
-/// The slab's (s,t) slices as texture layers (layer iu · N_v + iv, s along x); a black
-/// 1 × 1 layer without a slab.
+/// The slab's (s,t) slices as the layers of an `Rgba16Float` array (layer iu · N_v + iv, s
+/// along x) and their bilinear, clamping sampler (`resources::upload_array`); black layers
+/// without a slab.
 pub fn slab_texture(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
+    ctx: &crate::GpuContext,
     slab: Option<&LightSlab>,
-) -> wgpu::TextureView {
-    let (w, h, layers, data) = match slab {
-        None => (1, 1, 1, vec![half::f16::ZERO; 4]),
-        Some(s) => {
-            let [ns, nt] = s.n_st;
-            let mut data = Vec::with_capacity(s.radiance.len() * 4);
-            for iu in 0..s.n_uv[0] {
-                for iv in 0..s.n_uv[1] {
-                    for it in 0..nt {
-                        for is in 0..ns {
-                            let l = s.sample(iu, iv, is, it);
-                            data.extend([l.x, l.y, l.z, 1.0].map(half::f16::from_f32));
-                        }
-                    }
-                }
-            }
-            (ns as u32, nt as u32, (s.n_uv[0] * s.n_uv[1]) as u32, data)
-        }
+) -> (wgpu::TextureView, wgpu::Sampler) {
+    let (size, layers) = match slab {
+        None => ([1, 1], 1),
+        Some(s) => (
+            [s.n_st[0] as u32, s.n_st[1] as u32],
+            (s.n_uv[0] * s.n_uv[1]) as u32,
+        ),
     };
-    let texture = device.create_texture_with_data(
-        queue,
-        &wgpu::TextureDescriptor {
-            label: Some("light slab"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: layers,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba16Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        bytemuck::cast_slice(&data),
-    );
-    texture.create_view(&wgpu::TextureViewDescriptor {
-        dimension: Some(wgpu::TextureViewDimension::D2Array),
-        ..Default::default()
-    })
-}
-
-/// The bilinear, clamped sampler of the slices.
-pub fn slab_sampler(device: &wgpu::Device) -> wgpu::Sampler {
-    device.create_sampler(&wgpu::SamplerDescriptor {
-        label: Some("light slab"),
-        mag_filter: wgpu::FilterMode::Linear,
-        min_filter: wgpu::FilterMode::Linear,
-        ..Default::default()
+    crate::resources::upload_array(ctx, size, layers, |layer, texels| {
+        let Some(s) = slab else { return };
+        let layer = layer as usize;
+        if layer >= s.n_uv[0] * s.n_uv[1] {
+            return;
+        }
+        let (iu, iv) = (layer / s.n_uv[1], layer % s.n_uv[1]);
+        for it in 0..s.n_st[1] {
+            for is in 0..s.n_st[0] {
+                let l = s.sample(iu, iv, is, it);
+                let k = (it * s.n_st[0] + is) * 4;
+                texels[k..k + 3].copy_from_slice(&l.to_array().map(half::f16::from_f32));
+            }
+        }
     })
 }

@@ -12,7 +12,6 @@
 
 use lightlab_scene::photometry::Goniometric;
 use std::f32::consts::PI;
-use wgpu::util::DeviceExt;
 
 /// Texels over C (0 … 360°, wrapping).
 pub const WIDTH: u32 = 720;
@@ -51,46 +50,33 @@ pub fn lookup(table: &[f32], d: glam::Vec3) -> f32 {
     a * (1.0 - tv) + b * tv
 }
 
-/// The texture array of `profiles`, one layer each (a single black layer when there are
-/// none, so that the binding always exists).
-pub fn profile_texture(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    profiles: &[&Goniometric],
-) -> wgpu::TextureView {
-    let (w, h) = if profiles.is_empty() {
-        (1, 2)
-    } else {
-        (WIDTH, HEIGHT)
-    };
-    let data: Vec<f32> = if profiles.is_empty() {
-        vec![0.0; 2]
-    } else {
-        profiles.iter().flat_map(|g| table(g)).collect()
-    };
-    let texture = device.create_texture_with_data(
-        queue,
-        &wgpu::TextureDescriptor {
-            label: Some("light profiles"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: profiles.len().max(1) as u32,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R32Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        bytemuck::cast_slice(&data),
+/// The texture array of `profiles`, one layer each (black layers when there are none, and at
+/// least two layers: GL makes a one-layer texture a plain 2D one).
+pub fn profile_texture(ctx: &crate::GpuContext, profiles: &[&Goniometric]) -> wgpu::TextureView {
+    let layers = (profiles.len() as u32).max(2);
+    let tex = crate::resources::texture(
+        &ctx.device,
+        "light profiles",
+        WIDTH,
+        HEIGHT,
+        layers,
+        wgpu::TextureFormat::R32Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     );
-    texture.create_view(&wgpu::TextureViewDescriptor {
-        dimension: Some(wgpu::TextureViewDimension::D2Array),
-        ..Default::default()
-    })
+    let black = vec![0.0f32; (WIDTH * HEIGHT) as usize];
+    for layer in 0..layers {
+        let data = profiles.get(layer as usize).map(|g| table(g));
+        let data = data.as_deref().unwrap_or(&black);
+        crate::resources::write_layer(
+            ctx,
+            &tex,
+            layer,
+            bytemuck::cast_slice(data),
+            WIDTH * 4,
+            [WIDTH, HEIGHT],
+        );
+    }
+    crate::resources::array_view(&tex)
 }
 
 #[cfg(test)]

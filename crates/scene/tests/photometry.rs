@@ -415,6 +415,15 @@ fn goniometric_lights_survive_an_export_round_trip() {
     assert!(dir.path().join("room.light0.ies").exists());
     let back = gltf_io::import(&out, Default::default()).unwrap();
     assert_eq!(back.lights.len(), scene.lights.len());
+    // The reflector lamp's geometry stays marked as its luminaire.
+    let marked = |s: &lightlab_scene::Scene| {
+        s.instances
+            .iter()
+            .filter(|i| i.luminaire.as_deref() == Some("reflector"))
+            .count()
+    };
+    assert_eq!(marked(&back), marked(&scene));
+    assert_eq!(marked(&scene), 3);
     for (a, b) in scene.lights.iter().zip(&back.lights) {
         for d in directions() {
             let (x, y) = (a.emission(d), b.emission(d));

@@ -275,7 +275,7 @@ fn profile_texture(ctx: &GpuContext, scene: &Scene) -> wgpu::TextureView {
             _ => None,
         })
         .collect();
-    crate::photometric::profile_texture(&ctx.device, &ctx.queue, &profiles)
+    crate::photometric::profile_texture(ctx, &profiles)
 }
 
 /// Half-angle of the frustum an emissive instance is seen through.

@@ -64,12 +64,12 @@ struct FrameBuffers {
 
 impl FrameBuffers {
     fn new(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        ctx: &crate::GpuContext,
         frame: &FrameUniforms,
         ls: &LightSet,
         canned: Option<&super::CannedLight>,
     ) -> FrameBuffers {
+        let device = &ctx.device;
         let init = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -106,6 +106,7 @@ impl FrameBuffers {
             put(n + v, li, v);
         }
         let storage = wgpu::BufferUsages::STORAGE;
+        let (slab, slab_sampler) = crate::canned::slab_texture(ctx, canned.map(|c| &*c.slab));
         FrameBuffers {
             frame: init(
                 "frame",
@@ -116,12 +117,11 @@ impl FrameBuffers {
             views: init("shadow views", bytemuck::cast_slice(&all_views), storage),
             passes: init("pass slots", &slots, wgpu::BufferUsages::UNIFORM),
             profiles: crate::photometric::profile_texture(
-                device,
-                queue,
+                ctx,
                 &ls.profiles.iter().map(|p| &**p).collect::<Vec<_>>(),
             ),
-            slab: crate::canned::slab_texture(device, queue, canned.map(|c| &*c.slab)),
-            slab_sampler: crate::canned::slab_sampler(device),
+            slab,
+            slab_sampler,
         }
     }
 }
@@ -396,13 +396,7 @@ impl Renderer {
             ls.light_pos.len(),
             sun.as_ref().map(|(_, e)| e),
         );
-        let buffers = FrameBuffers::new(
-            device,
-            &ctx.queue,
-            &frame,
-            &ls,
-            settings.light_field.as_ref(),
-        );
+        let buffers = FrameBuffers::new(ctx, &frame, &ls, settings.light_field.as_ref());
         let kind = source.kind();
         let layouts = GroupLayouts::new(device, &kind.layout_entries());
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
