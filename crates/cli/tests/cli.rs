@@ -794,6 +794,20 @@ fn viewer_window_shows_what_render_writes() {
                 ("shadows", vec!["--baked".to_string(), path(&sh)])
             }
             t if t.starts_with("lpv") => ("cornell", vec!["--lpv-grid".into(), "8".into()]),
+            // A small slab of the luminaire's lamp, baked alike (same seed) by both commands.
+            "canned-light" => (
+                "luminaire",
+                [
+                    "--slab-uv",
+                    "2x2",
+                    "--slab-st",
+                    "16x16",
+                    "--slab-samples",
+                    "1",
+                ]
+                .map(String::from)
+                .to_vec(),
+            ),
             _ => ("shadows", vec![]),
         };
         if t == "shl-compressed" {
