@@ -24,10 +24,12 @@ pub struct RenderArgs {
     #[arg(long)]
     pub scene: String,
     /// `reference` (path-traced ground truth), `direct` (direct light only), or a GPU
-    /// technique: `phong`, `phong-shadow-volumes`, `phong-shadow-maps`, `lightmap` (baked
-    /// light only) or `lightmap+phong` (baked indirect light plus dynamic lights and shadow
-    /// volumes); the SH techniques `prt-vertex`, `prt-textured`, `shl`, `shl-compressed`,
-    /// `shl-normalmapped` (transfer × the scene's lights projected on SH); the light
+    /// technique: `phong`, `phong-shadow-volumes`, `phong-shadow-maps`, `canned-light` (the
+    /// scene's luminaire as a light slab, `--light-field DIR` or baked first), `lightmap`
+    /// (baked light only) or `lightmap+phong` (baked indirect light plus dynamic lights and
+    /// shadow volumes); the SH techniques `prt-vertex`, `prt-textured`, `prt-hierarchical`,
+    /// `shl`, `shl-compressed`, `shl-normalmapped` (transfer × the scene's lights projected on
+    /// SH); the light
     /// propagation volumes `lpv` and `lpv-faithful` (shadow-mapped direct light + one bounce
     /// from the volume). The light-map and SH techniques read `--baked DIR` or bake first.
     /// The sky's diffuse light: traced (reference, direct); SH irradiance occluded through
