@@ -505,6 +505,11 @@ pub struct RasterArgs {
     /// every parameterisation; each roughness level holds as many).
     #[arg(long, default_value_t = 2 * 256 * 256)]
     pub env_texels: u32,
+    /// Planar mirrors (flat, metallic, roughness ≤ 0.03; up to four, the largest): on draws
+    /// each one's reflection from the mirrored eye every frame (Heidrich ch. 10, one frame of
+    /// the scene per mirror); off leaves them reflecting the environment map.
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub planar_mirrors: String,
 }
 
 impl Default for RasterArgs {
@@ -533,6 +538,7 @@ impl Default for RasterArgs {
             sky_occlusion: 64,
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
+            planar_mirrors: "on".into(),
         }
     }
 }
@@ -584,6 +590,7 @@ impl RasterArgs {
             dynamic_env_every: self.dynamic_env_every,
             refraction: self.refraction,
             env_texels: self.env_texels,
+            planar_mirrors: self.planar_mirrors == "on",
             ..Default::default()
         })
     }

@@ -22,7 +22,8 @@ fn scenes_lists_one_name_per_line() {
             "spheres",
             "atrium",
             "prt-dynamic",
-            "luminaire"
+            "luminaire",
+            "mirror"
         ]
     );
 }
@@ -323,6 +324,7 @@ fn demo_preview_writes_a_report_with_every_scene() {
         "spheres",
         "atrium",
         "luminaire",
+        "mirror",
     ] {
         assert!(html.contains(&format!("{s}-reference.png")), "{s}");
         assert!(dir.path().join(format!("{s}-reference.exr")).exists());

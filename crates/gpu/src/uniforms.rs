@@ -26,6 +26,9 @@ pub struct FrameUniforms {
     /// Wind sway (lightlab_core::wind::Wind::uniform).
     pub wind_a: [f32; 4],
     pub wind_b: [f32; 4],
+    /// Plane (n, d): fragments with n·x + d < 0 are discarded (a planar mirror's reflected
+    /// view, `raster::mirror`); zero keeps everything.
+    pub clip_plane: [f32; 4],
 }
 
 /// The light-map source's uniforms (WGSL `LightmapUniforms`): `mode` 1 bilinear, 2 bicubic,
@@ -188,7 +191,8 @@ mod tests {
                     linear_bias,
                     shadow_size,
                     wind_a,
-                    wind_b
+                    wind_b,
+                    clip_plane
                 ),
             ),
             (

@@ -127,8 +127,8 @@ impl FrameBuffers {
 }
 
 /// Sampled textures the LPV techniques' fragment stage binds (materials, shadow maps,
-/// environment maps, the volume's three, the sky occlusion's depth maps).
-const LPV_SAMPLED_TEXTURES: u32 = 17;
+/// environment maps and planar mirrors, the volume's three, the sky occlusion's depth maps).
+const LPV_SAMPLED_TEXTURES: u32 = 18;
 
 /// The `sky` and `lpv` sources' occlusion: the sky's diffuse light (without the sun taken out of it, or
 /// a constant ambient's uniform sky) over `s.sky_occlusion` shadow-mapped directions.
@@ -185,6 +185,7 @@ fn frame_uniforms(
         normal_offset: s.normal_offset,
         linear_bias: s.linear_bias,
         shadow_size: s.shadow_size as f32,
+        clip_plane: [0.0; 4],
     }
 }
 
@@ -311,12 +312,55 @@ pub(super) fn queries(
     })
 }
 
+/// Whether a renderer with this ambient input draws the specular environment term (not the
+/// debug and indirect-only views).
+fn env_on(ambient: AmbientInput) -> bool {
+    !matches!(ambient, AmbientInput::Normals | AmbientInput::Lpv(_, true))
+}
+
 impl Renderer {
+    /// A renderer, and for each planar mirror of the scene (`settings.planar_mirrors`) the
+    /// renderer of its reflected view (`raster::mirror`).
     pub(super) fn build(
         ctx: &GpuContext,
         scene: &Scene,
         settings: RasterSettings,
         ambient: AmbientInput,
+    ) -> Result<Renderer, RasterError> {
+        let found = if settings.planar_mirrors && env_on(ambient) {
+            super::mirror::find(scene)
+        } else {
+            vec![]
+        };
+        let mut r = Self::build_one(ctx, scene, settings.clone(), ambient, &found, false)?;
+        for f in found {
+            let child_settings = RasterSettings {
+                planar_mirrors: false,
+                ..settings.clone()
+            };
+            let mut child = Self::build_one(ctx, scene, child_settings, ambient, &[], true)?;
+            child.hidden = Some(f.instance);
+            r.mirrors.push(super::mirror::Mirror {
+                found: f,
+                child: Box::new(child),
+                active: false,
+            });
+        }
+        if !r.mirrors.is_empty() {
+            r.set_camera(ctx, r.camera.clone());
+        }
+        Ok(r)
+    }
+
+    /// One renderer: `mirrors` are the planar mirrors whose reflected views its environment
+    /// term reads; `mirrored` draws a reflected view (clockwise front faces).
+    fn build_one(
+        ctx: &GpuContext,
+        scene: &Scene,
+        settings: RasterSettings,
+        ambient: AmbientInput,
+        mirrors: &[super::mirror::PlanarMirror],
+        mirrored: bool,
     ) -> Result<Renderer, RasterError> {
         let s = &settings;
         if let AmbientInput::Lightmap(lm) = ambient
@@ -415,18 +459,19 @@ impl Renderer {
             &PipelineLayouts::new(device, &layouts),
             gbuffer_formats(ctx),
             linear_format,
+            mirrored,
         );
         let targets = Targets::new(ctx, s);
         let (shadow, arrays) = ShadowMaps::new(ctx, s, ls.views.len(), linear_format);
         // The specular environment term, except on the debug and indirect-only views.
-        let env_on = !matches!(ambient, AmbientInput::Normals | AmbientInput::Lpv(_, true));
         let env = super::env::EnvResources::new(
             ctx,
             scene,
             s,
             &camera,
-            env_on,
+            env_on(ambient),
             sun.as_ref().map(|(_, e)| e),
+            mirrors,
         );
         let lighting = lighting_group(device, &layouts.lighting, &arrays, &source, &env);
         let g = groups(device, &layouts, &buffers, &targets, lighting);
@@ -475,6 +520,8 @@ impl Renderer {
             hidden: None,
             moved: false,
             lens: None,
+            mirrors: vec![],
+            clip_rect: None,
         })
     }
 }

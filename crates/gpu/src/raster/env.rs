@@ -78,6 +78,7 @@ pub(super) fn layout_entries() -> Vec<LayoutEntry> {
         filtered_texture(22, Dim::D2),
         buffer(23, wgpu::BufferBindingType::Uniform, false),
         super::bindings::storage(24),
+        filtered_texture(25, Dim::D2Array),
     ]
 }
 
@@ -93,6 +94,9 @@ pub(super) struct EnvResources {
     spheres: wgpu::Buffer,
     /// What the term reflects, for reports: None when it is off.
     pub summary: Option<String>,
+    /// The planar mirrors' reflected views, one layer each (`raster::mirror`).
+    pub mirror_images: wgpu::Texture,
+    mirror_view: wgpu::TextureView,
 }
 
 /// Which lobes the scene's materials need under `prefilter`.
@@ -219,6 +223,7 @@ impl EnvResources {
         camera: &Camera,
         enabled: bool,
         sun: Option<&lightlab_core::sh_env::EnvSun>,
+        mirrors: &[super::mirror::PlanarMirror],
     ) -> EnvResources {
         let mut maps = if enabled {
             prefiltered(scene, s, camera, sun)
@@ -276,6 +281,16 @@ impl EnvResources {
             }
             u.dynamic_objects = objects.len() as u32;
         }
+        // A planar mirror's fragments read layer k of the mirror images (w = k + 1).
+        for (k, m) in mirrors.iter().enumerate() {
+            instances[m.instance].dynamic[3] = k as u32 + 1;
+        }
+        let mirror_images =
+            super::mirror::image_array(ctx, (s.width, s.height), mirrors.len() as u32);
+        let mirror_view = mirror_images.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("environment"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -301,6 +316,8 @@ impl EnvResources {
             lut: upload_lut(ctx),
             uniforms,
             summary,
+            mirror_images,
+            mirror_view,
         }
     }
 
@@ -324,6 +341,7 @@ impl EnvResources {
             entry(22, R::TextureView(&self.lut)),
             entry(23, self.uniforms.as_entire_binding()),
             entry(24, self.spheres.as_entire_binding()),
+            entry(25, R::TextureView(&self.mirror_view)),
         ]
     }
 }

@@ -26,6 +26,7 @@ mod build;
 pub mod env;
 pub mod env_dynamic;
 mod light_set;
+pub mod mirror;
 mod passes;
 mod pipelines;
 mod readback;
@@ -120,6 +121,11 @@ pub struct Renderer {
     /// Camera space → the space the camera's projection applies to, and the eye in camera
     /// space (a lens's view of the scene); None: the pinhole.
     lens: Option<(Mat4, Vec3)>,
+    /// The planar mirrors and the renderers of their reflected views (`mirror`).
+    mirrors: Vec<mirror::Mirror>,
+    /// The pixels the camera passes draw (a mirror's reflected view: the mirror's screen
+    /// rectangle); None: all.
+    clip_rect: Option<(u32, u32, u32, u32)>,
 }
 
 impl Renderer {
@@ -215,6 +221,9 @@ impl Renderer {
         let data = crate::prt::pack_light(points, coeffs, sh.bands);
         ctx.queue
             .write_buffer(&sh.light, 0, bytemuck::cast_slice(&data));
+        for m in &mut self.mirrors {
+            m.child.set_sh_light(ctx, points, coeffs)?;
+        }
         Ok(())
     }
 
@@ -247,6 +256,9 @@ impl Renderer {
         self.scene.move_instance(&ctx.queue, scene, i);
         self.env.moved(ctx, scene, i);
         self.moved = true;
+        for m in &mut self.mirrors {
+            m.child.move_instance(ctx, scene, i);
+        }
     }
 
     /// Update the dynamic environment maps every `every` frames from now on (0: keep those
@@ -254,6 +266,9 @@ impl Renderer {
     pub fn set_dynamic_env_every(&mut self, every: u32) {
         if let Some(d) = &mut self.env.dynamic {
             d.set_every(every);
+        }
+        for m in &mut self.mirrors {
+            m.child.set_dynamic_env_every(every);
         }
     }
 
@@ -281,6 +296,9 @@ impl Renderer {
         if let Some(l) = self.ambient.volume_mut() {
             l.set_wind(ctx, &wind);
         }
+        for m in &mut self.mirrors {
+            m.child.set_wind(ctx, wind)?;
+        }
         Ok(())
     }
 
@@ -304,7 +322,11 @@ impl Renderer {
         self.frame.view_proj = view_proj.to_cols_array_2d();
         self.frame.inv_view_proj = view_proj.inverse().to_cols_array_2d();
         self.frame.view = view.to_cols_array_2d();
-        self.frame.camera_pos = camera.transform.transform_point3(eye).to_array();
+        let eye_world = camera.transform.transform_point3(eye);
+        self.frame.camera_pos = eye_world.to_array();
+        for m in &mut self.mirrors {
+            m.follow(ctx, &camera, eye_world, self.lens, view_proj);
+        }
         self.camera = camera;
         ctx.queue
             .write_buffer(&self.frame_buf, 0, bytemuck::bytes_of(&self.frame));
@@ -328,8 +350,10 @@ impl Renderer {
             self.build_volumes(ctx);
             times.cpu_volumes_ms = tv.elapsed().as_secs_f64() * 1e3;
         }
+        self.render_mirrors(ctx, &mut times);
         let mut labels = vec![];
         let mut enc = ctx.device.create_command_encoder(&Default::default());
+        self.copy_mirror_images(&mut enc);
         self.prepasses(&mut enc, &mut labels);
         if self.settings.shadows.map() {
             self.shadow_map_passes(&mut enc, &mut labels);

@@ -25,6 +25,19 @@ pub(super) fn timestamp_slot<'q>(
     Some((set, 2 * i, 2 * i + 1))
 }
 
+/// Rectangle `a` (x, y, w, h) within `b` (None: the whole frame); None when they miss.
+fn intersect(
+    a: (u32, u32, u32, u32),
+    b: Option<(u32, u32, u32, u32)>,
+) -> Option<(u32, u32, u32, u32)> {
+    let Some(b) = b else {
+        return Some(a);
+    };
+    let (x0, y0) = (a.0.max(b.0), a.1.max(b.1));
+    let (x1, y1) = ((a.0 + a.2).min(b.0 + b.2), (a.1 + a.3).min(b.1 + b.3));
+    (x1 > x0 && y1 > y0).then_some((x0, y0, x1 - x0, y1 - y0))
+}
+
 pub(super) fn load_f32() -> wgpu::Operations<f32> {
     wgpu::Operations {
         load: wgpu::LoadOp::Load,
@@ -331,6 +344,9 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
+            if let Some((x, y, w, h)) = self.clip_rect {
+                pass.set_scissor_rect(x, y, w, h);
+            }
             pass.set_bind_group(0, &self.group0, &[0]);
             pass.set_bind_group(2, &self.group2, &[]);
             let pipes = if deferred {
@@ -378,6 +394,9 @@ impl Renderer {
             return;
         };
         let mut pass = self.hdr_pass_loading_depth(enc, labels, "sky");
+        if let Some((x, y, w, h)) = self.clip_rect {
+            pass.set_scissor_rect(x, y, w, h);
+        }
         pass.set_pipeline(&self.pipelines.sky);
         pass.set_bind_group(0, &self.group0, &[0]);
         pass.set_bind_group(1, &self.scene.materials[0].bind_group, &[]);
@@ -394,7 +413,10 @@ impl Renderer {
     ) {
         let deferred = self.settings.path == RenderPath::Deferred;
         for li in 0..self.light_pos.len() {
-            let Some(sc) = self.scissor(li) else {
+            let Some(sc) = self
+                .scissor(li)
+                .and_then(|sc| intersect(sc, self.clip_rect))
+            else {
                 continue;
             };
             let slot = [(li as u64 * SLOT) as u32];

@@ -36,6 +36,7 @@ struct PipeDesc<'a> {
     targets: &'a [Option<wgpu::ColorTargetState>],
     depth: Option<wgpu::DepthStencilState>,
     cull: Option<wgpu::Face>,
+    front_face: wgpu::FrontFace,
 }
 
 fn pipeline(
@@ -54,7 +55,7 @@ fn pipeline(
         },
         primitive: wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleList,
-            front_face: wgpu::FrontFace::Ccw,
+            front_face: d.front_face,
             cull_mode: d.cull,
             ..Default::default()
         },
@@ -151,11 +152,20 @@ struct Maker<'a> {
     device: &'a wgpu::Device,
     module: &'a wgpu::ShaderModule,
     layouts: &'a PipelineLayouts,
+    /// Clockwise in a planar mirror's reflected view (the reflection flips the winding).
+    front_face: wgpu::FrontFace,
 }
 
 impl Maker<'_> {
     fn make(&self, d: PipeDesc) -> wgpu::RenderPipeline {
-        pipeline(self.device, self.module, d)
+        pipeline(
+            self.device,
+            self.module,
+            PipeDesc {
+                front_face: self.front_face,
+                ..d
+            },
+        )
     }
 
     /// A scene pass over the mesh vertices, single- and double-sided.
@@ -177,6 +187,7 @@ impl Maker<'_> {
                 targets,
                 depth: depth.clone(),
                 cull: cull(ds),
+                front_face: wgpu::FrontFace::Ccw,
             })
         })
     }
@@ -199,6 +210,7 @@ impl Maker<'_> {
             targets,
             depth,
             cull: None,
+            front_face: wgpu::FrontFace::Ccw,
         })
     }
 }
@@ -211,11 +223,17 @@ impl Pipelines {
         layouts: &PipelineLayouts,
         gb_formats: [wgpu::TextureFormat; 4],
         linear_format: wgpu::TextureFormat,
+        mirrored: bool,
     ) -> Pipelines {
         let m = Maker {
             device,
             module,
             layouts,
+            front_face: if mirrored {
+                wgpu::FrontFace::Cw
+            } else {
+                wgpu::FrontFace::Ccw
+            },
         };
         let no_bias = wgpu::DepthBiasState::default();
         let gb_targets: Vec<_> = std::iter::once(hdr(None))
@@ -303,6 +321,7 @@ fn stencil_pipelines(m: &Maker) -> [[wgpu::RenderPipeline; 2]; 3] {
                 targets: if k == 1 { &silent } else { no_targets },
                 depth: depth_state(false, C::Greater, front, back, 0xff, no_bias),
                 cull: None,
+                front_face: wgpu::FrontFace::Ccw,
             })
         })
     };
@@ -336,6 +355,7 @@ fn stencil_pipelines(m: &Maker) -> [[wgpu::RenderPipeline; 2]; 3] {
             targets: if k == 1 { &silent } else { no_targets },
             depth: depth_state(false, C::GreaterEqual, replace, replace, 0xff, toward),
             cull: None,
+            front_face: wgpu::FrontFace::Ccw,
         })
     });
     [zfail, zpass, planar]
@@ -373,6 +393,7 @@ fn shadow_pipelines(
             targets,
             depth: shadow_ds(bias),
             cull: None,
+            front_face: wgpu::FrontFace::Ccw,
         })
     };
     [

@@ -218,6 +218,9 @@ pub struct RasterSettings {
     pub env_texels: u32,
     /// A canned light source (Heidrich ch. 7) added to the scene's lights (`canned.rs`).
     pub light_field: Option<CannedLight>,
+    /// Draw each planar mirror's reflection from the mirrored eye (`raster::mirror`, up to
+    /// four, one level deep); false: mirrors reflect the environment maps like any surface.
+    pub planar_mirrors: bool,
 }
 
 /// How a canned light is drawn (§7.2.2): one additive pass per (u,v) grid point, each a spot
@@ -276,6 +279,7 @@ impl Default for RasterSettings {
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
             light_field: None,
+            planar_mirrors: true,
         }
     }
 }

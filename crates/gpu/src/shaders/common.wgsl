@@ -26,6 +26,8 @@ struct FrameUniforms {
     // Wind sway (lightlab_core::wind::Wind::uniform).
     wind_a: vec4<f32>,
     wind_b: vec4<f32>,
+    // Fragments with n·x + d < 0 are discarded (a planar mirror's reflected view); zero: none.
+    clip_plane: vec4<f32>,
 }
 
 // The light-map source's reads: 1 bilinear, 2 bicubic, +4 directional; E/π pages (directional

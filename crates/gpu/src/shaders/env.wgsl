@@ -37,7 +37,7 @@ struct EnvUniforms {
 
 // Per scene instance: its bounding sphere (centre, radius) and its dynamic maps (first colour
 // layer, first inverse-distance layer, 1 when it has them; they are centred on the sphere's
-// centre).
+// centre), then k + 1 when it is planar mirror k (0: not one).
 struct EnvInstance {
     sphere: vec4<f32>,
     dynamic: vec4<u32>,
@@ -48,6 +48,18 @@ struct EnvInstance {
 @group(2) @binding(22) var env_lut: texture_2d<f32>;
 @group(2) @binding(23) var<uniform> env_u: EnvUniforms;
 @group(2) @binding(24) var<storage, read> env_instances: array<EnvInstance>;
+// The planar mirrors' reflected views, pixel-aligned with the frame (raster/mirror.rs).
+@group(2) @binding(25) var env_mirrors: texture_2d_array<f32>;
+
+// A planar mirror's reflection (Heidrich 1999 ch. 10 intro): the scene drawn from the mirrored
+// eye, read at this fragment's own pixel, times the surface's Fresnel reflectance at the view
+// angle (the mirror limit of the GGX lobe, as the path tracer's).
+fn env_planar_mirror(s: Surface, nv: f32, pixel: vec2<f32>, layer: u32) -> vec3<f32> {
+    let size = vec2<i32>(textureDimensions(env_mirrors));
+    let p = clamp(vec2<i32>(pixel), vec2<i32>(0), size - vec2<i32>(1));
+    let l = textureLoad(env_mirrors, p, i32(layer), 0).rgb;
+    return l * surface_fresnel(s, clamp(nv, 0.0, 1.0));
+}
 
 // (face, u, v) of map direction m, as lightlab_core::param::Param::dir_to_uv.
 fn env_face_uv(m: vec3<f32>) -> vec3<f32> {

@@ -67,8 +67,12 @@ fn base_color(in: VertexOut) -> vec4<f32> {
     return material_base(in.uv0, in.uv1, in.color);
 }
 
+// Alpha-masked texels, and what lies behind a planar mirror in its reflected view.
 fn alpha_test(in: VertexOut) {
     if material.alpha_cutoff >= 0.0 && base_color(in).a < material.alpha_cutoff {
+        discard;
+    }
+    if dot(frame.clip_plane.xyz, in.world) + frame.clip_plane.w < 0.0 {
         discard;
     }
 }
@@ -150,12 +154,17 @@ fn emission(in: VertexOut) -> vec3<f32> {
 
 // The radiance a fragment gets besides the per-light passes: the ambient source's term and
 // emission (`source_radiance`, defined by the ambient source compiled after this file), and the
-// specular environment term (env.wgsl).
+// specular environment term (env.wgsl), or a planar mirror's reflected view.
 fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     let v = safe_normalize(frame.camera_pos - s.p, s.n);
     let r = reflect(-v, s.n);
     let dr = max(length(dpdx(r)), length(dpdy(r)));
-    return source_radiance(s, in, nv) + env_specular(s, v, r, dr, in.instance);
+    // A planar mirror shows its reflected view instead of the environment map (`select`: the
+    // lookups stay out of a branch on per-fragment data, see env.wgsl on lavapipe).
+    let mirror = env_instances[in.instance].dynamic.w;
+    let spec = env_specular(s, v, r, dr, in.instance);
+    let planar = env_planar_mirror(s, dot(s.n, v), in.clip.xy, max(mirror, 1u) - 1u);
+    return source_radiance(s, in, nv) + select(spec, planar, mirror != 0u);
 }
 
 // The environment's unshadowed irradiance on the diffuse surface: from its SH coefficients

@@ -15,6 +15,7 @@
 mod dynamic;
 pub mod geom;
 pub mod luminaire;
+pub mod mirror;
 
 use crate::model::*;
 use geom::*;
@@ -23,7 +24,7 @@ use lightlab_core::image::Image;
 use lightlab_core::sampling::{Rng, uniform_sphere};
 
 /// Names of the built-in scenes, in the order `lightlab scenes` lists them.
-pub const NAMES: [&str; 9] = [
+pub const NAMES: [&str; 10] = [
     "cornell",
     "room",
     "shadows",
@@ -33,6 +34,7 @@ pub const NAMES: [&str; 9] = [
     "atrium",
     "prt-dynamic",
     "luminaire",
+    "mirror",
 ];
 
 /// One-line description of a built-in scene.
@@ -51,6 +53,7 @@ pub fn describe(name: &str) -> Option<&'static str> {
             "a sphere, a ball and a ring moving near each other over tiled ground (48 frames)"
         }
         "luminaire" => "small room lit by measured lamps: batwing downlight, wall washer, flood",
+        "mirror" => "a wall mirror beside a ball, a box and a pillar: planar reflections",
         _ => return None,
     })
 }
@@ -67,6 +70,7 @@ pub fn builtin(name: &str) -> Option<Scene> {
         "atrium" => atrium(),
         "prt-dynamic" => dynamic::prt_dynamic(),
         "luminaire" => luminaire::luminaire(),
+        "mirror" => mirror::mirror(),
         _ => return None,
     };
     s.name = name.into();
