@@ -60,9 +60,13 @@ pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool)
     if method == "light-field" {
         return bake_light_field(scene, out, args, json);
     }
+    if method == "refraction-field" {
+        return bake_refraction_field(scene, out, args, json);
+    }
     let Some(m) = Method::parse(method) else {
         bail!(
-            "unknown bake method '{method}' (known: {}, sh, prt-textured, shl, prt)",
+            "unknown bake method '{method}' (known: {}, sh, prt-textured, shl, prt, light-field, \
+             refraction-field)",
             Method::NAMES.join(", ")
         );
     };
@@ -102,6 +106,44 @@ pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool)
     }
     if json {
         println!("{}", serde_json::to_string(&manifest.stats)?);
+    }
+    Ok(())
+}
+
+/// `lightlab bake --method refraction-field`: a glass object's geometry light field (Heidrich
+/// §10.2); the folder holds `field.json`, two EXR atlases per slab and the bake manifest.
+fn bake_refraction_field(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
+    let t = std::time::Instant::now();
+    let (instance, field) = crate::techniques::refraction::bake(scene, &args.field)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let stats = serde_json::json!({
+        "method": "refraction-field",
+        "scene": scene.name,
+        "glass": scene.instances[instance].name,
+        "n_uv": field.n_uv,
+        "n_st": field.n_st,
+        "gpu_bytes": field.gpu_bytes(),
+        "seconds": seconds,
+    });
+    let manifest = stats.clone();
+    lightlab_bake::folder::write(out, |dir| {
+        field
+            .write(dir)
+            .map_err(|e| lightlab_bake::BakeError::Io(e.to_string()))?;
+        Ok(manifest)
+    })?;
+    eprintln!(
+        "baked {}'s glass '{}' into a 6 × {}² × {}² refraction field ({:.1} MB) in {seconds:.1} s; \
+         wrote {}",
+        scene.name,
+        scene.instances[instance].name,
+        field.n_uv,
+        field.n_st,
+        field.gpu_bytes() as f64 / 1e6,
+        out.display()
+    );
+    if json {
+        println!("{stats}");
     }
     Ok(())
 }

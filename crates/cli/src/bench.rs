@@ -107,6 +107,20 @@ pub enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// A geometry light field's error, memory and frame time against its resolution (the
+    /// scene's largest solid glass object in its environment).
+    Refraction {
+        #[arg(long, default_value = "glass")]
+        scene: String,
+        #[command(flatten)]
+        field: crate::options::FieldArgs,
+        #[command(flatten)]
+        refraction: crate::bench_refraction::RefractionBenchArgs,
+        #[command(flatten)]
+        load: LoadArgs,
+        #[arg(long)]
+        json: bool,
+    },
     /// Milliseconds per pass of a GPU technique (GPU timestamps where the adapter has them).
     Frame {
         #[arg(long)]
@@ -161,6 +175,13 @@ pub fn run(cmd: BenchCommand) -> Result<()> {
             load,
             json,
         } => crate::bench_canned::run((&scene, &load), &slab, &canned, json),
+        BenchCommand::Refraction {
+            scene,
+            field,
+            refraction,
+            load,
+            json,
+        } => crate::bench_refraction::run((&scene, &load), &field, &refraction, json),
         BenchCommand::Frame {
             scene,
             technique,

@@ -191,8 +191,9 @@ fn demo_techniques(scene: &str) -> Vec<Technique> {
     families
         .into_iter()
         .flat_map(Technique::of)
-        // Only `luminaire` has a lamp to can.
+        // Only `luminaire` has a lamp to can, only `glass` and `spheres` solid glass.
         .filter(|t| *t != Technique::CannedLight || scene == "luminaire")
+        .filter(|t| *t != Technique::LightfieldRefraction || matches!(scene, "glass" | "spheres"))
         .collect()
 }
 

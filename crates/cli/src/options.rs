@@ -175,6 +175,12 @@ pub struct TechniqueArgs {
     /// as the seed) or `array` (one pass summing every grid point from a texture array).
     #[arg(long, default_value = "per-point")]
     pub light_field_passes: lightlab_gpu::raster::CannedPasses,
+    /// A geometry light field (a folder of `bake --method refraction-field`): the Phong
+    /// techniques refract the glass object it was baked for through it (Heidrich §10.2), in
+    /// whatever environment the scene has now. `lightfield-refraction` without it bakes the
+    /// scene's largest solid glass object first.
+    #[arg(long, value_name = "DIR")]
+    pub refraction_field: Option<PathBuf>,
     /// Pose an animated scene (`prt-dynamic`, or a glTF file with an animation) at frame K,
     /// in the reference and in every technique alike. The light-map and SH techniques bake
     /// the rest pose and move the objects: a moving object's SH transfer holds its own
@@ -685,6 +691,34 @@ pub struct BakeArgs {
     pub compress: Option<usize>,
     #[command(flatten)]
     pub slab: SlabArgs,
+    #[command(flatten)]
+    pub field: FieldArgs,
+}
+
+/// `--method refraction-field`: a glass object's geometry light field (Heidrich §10.2).
+#[derive(Args, Clone, Debug)]
+pub struct FieldArgs {
+    /// The glass instance (by name); default: the scene's largest solid, smooth glass object.
+    #[arg(long)]
+    pub glass: Option<String>,
+    /// (u,v) samples per side of each of the six slabs (where rays cross the object's box).
+    /// Where the ray crosses the object matters more than its slope: at equal memory
+    /// (12.6 MB) 64² × 8² scores 0.029 on `glass`, 32² × 16² 0.041 (`bench refraction`).
+    #[arg(long, default_value_t = 64)]
+    pub field_uv: usize,
+    /// (s,t) samples per side of each slab (the rays' slopes).
+    #[arg(long, default_value_t = 8)]
+    pub field_st: usize,
+}
+
+impl Default for FieldArgs {
+    fn default() -> Self {
+        FieldArgs {
+            glass: None,
+            field_uv: 64,
+            field_st: 8,
+        }
+    }
 }
 
 /// `--method light-field`: the light slab of a luminaire (Heidrich ch. 7).
@@ -778,6 +812,7 @@ impl Default for BakeArgs {
             detail_cage: 0.05,
             compress: None,
             slab: SlabArgs::default(),
+            field: FieldArgs::default(),
         }
     }
 }

@@ -15,6 +15,7 @@ pub enum Technique {
     PhongShadowVolumes,
     PhongShadowMaps,
     CannedLight,
+    LightfieldRefraction,
     Lightmap,
     LightmapPhong,
     PrtVertex,
@@ -98,6 +99,7 @@ pub const REGISTRY: &[Entry] = {
         entry(T::PhongShadowVolumes, "phong-shadow-volumes", F::Phong, "Phong with stencil shadow volumes (Fuchs §4.4)"),
         entry(T::PhongShadowMaps, "phong-shadow-maps", F::Phong, "Phong with shadow maps (Heidrich ch. 6)"),
         entry(T::CannedLight, "canned-light", F::Phong, "shadow-mapped Phong with the luminaire as a light slab (Heidrich ch. 7)"),
+        entry(T::LightfieldRefraction, "lightfield-refraction", F::Phong, "shadow-mapped Phong, glass refracting through its geometry light field (Heidrich §10.2)"),
         entry(T::Lightmap, "lightmap", F::Lightmap, "baked light only (Fuchs §3.4)"),
         entry(T::LightmapPhong, "lightmap+phong", F::Lightmap, "baked indirect light + real-time lights with shadow volumes"),
         entry(T::PrtVertex, "prt-vertex", F::Sh, "per-vertex PRT (McKenzie Chapter ch. 4)"),
@@ -175,12 +177,21 @@ impl Technique {
             (T::PhongShadowVolumes | T::LightmapPhong, None | Some(V::Zfail)) => S::VolumesZFail,
             (T::PhongShadowVolumes | T::LightmapPhong, Some(V::Zpass)) => S::VolumesZPass,
             (
-                T::PhongShadowMaps | T::CannedLight | T::Lpv | T::LpvFaithful,
+                T::PhongShadowMaps
+                | T::CannedLight
+                | T::LightfieldRefraction
+                | T::Lpv
+                | T::LpvFaithful,
                 None | Some(V::Depth),
             ) => S::Map,
-            (T::PhongShadowMaps | T::CannedLight | T::Lpv | T::LpvFaithful, Some(V::Linear)) => {
-                S::MapLinear
-            }
+            (
+                T::PhongShadowMaps
+                | T::CannedLight
+                | T::LightfieldRefraction
+                | T::Lpv
+                | T::LpvFaithful,
+                Some(V::Linear),
+            ) => S::MapLinear,
             (T::PhongShadowMaps | T::Lpv | T::LpvFaithful, Some(V::Planar)) => S::Planar,
             (T::Lightmap | T::Normals, None) => S::None,
             (t, None) if t.family() == Family::Sh => S::None,

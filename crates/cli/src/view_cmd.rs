@@ -55,8 +55,12 @@ pub fn view(a: &ViewArgs) -> Result<()> {
     // `canned-light` needs a luminaire to bake, or a slab.
     let canned =
         a.gpu.light_field.is_some() || !lightlab_trace::luminaire::names(&scene).is_empty();
+    // `lightfield-refraction` needs solid glass to bake, or a field.
+    let glass = a.gpu.refraction_field.is_some()
+        || !lightlab_trace::refraction_field::glass_instances(&scene).is_empty();
     let techniques: Vec<Technique> = Technique::gpu()
         .filter(|t| canned || *t != Technique::CannedLight)
+        .filter(|t| glass || *t != Technique::LightfieldRefraction)
         .collect();
     let first = techniques
         .iter()

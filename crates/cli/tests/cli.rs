@@ -23,7 +23,8 @@ fn scenes_lists_one_name_per_line() {
             "atrium",
             "prt-dynamic",
             "luminaire",
-            "mirror"
+            "mirror",
+            "glass"
         ]
     );
 }
@@ -325,6 +326,7 @@ fn demo_preview_writes_a_report_with_every_scene() {
         "atrium",
         "luminaire",
         "mirror",
+        "glass",
     ] {
         assert!(html.contains(&format!("{s}-reference.png")), "{s}");
         assert!(dir.path().join(format!("{s}-reference.exr")).exists());
@@ -809,6 +811,13 @@ fn viewer_window_shows_what_render_writes() {
                 ]
                 .map(String::from)
                 .to_vec(),
+            ),
+            // A small refraction field of the glass torus.
+            "lightfield-refraction" => (
+                "glass",
+                ["--field-uv", "8", "--field-st", "4"]
+                    .map(String::from)
+                    .to_vec(),
             ),
             _ => ("shadows", vec![]),
         };

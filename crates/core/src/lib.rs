@@ -38,6 +38,7 @@ pub mod metrics;
 pub mod names;
 pub mod param;
 pub mod quadrature;
+pub mod refraction_field;
 pub mod sampling;
 pub mod sh;
 pub mod sh_env;

@@ -69,6 +69,27 @@ pub fn relmse(a: &Image, reference: &Image) -> Result<f64, MetricsError> {
     Ok(s / (3.0 * a.data.len() as f64))
 }
 
+/// [`relmse`] over the pixels where `mask` is true (row-major, one flag per pixel); 0 when
+/// none is.
+pub fn relmse_masked(a: &Image, reference: &Image, mask: &[bool]) -> Result<f64, MetricsError> {
+    check(a, reference)?;
+    let (mut s, mut n) = (0.0f64, 0usize);
+    for ((x, y), _) in a
+        .data
+        .iter()
+        .zip(&reference.data)
+        .zip(mask)
+        .filter(|(_, m)| **m)
+    {
+        for c in 0..3 {
+            let (x, y) = (x[c] as f64, y[c] as f64);
+            s += (x - y) * (x - y) / (y * y + 0.01);
+        }
+        n += 3;
+    }
+    Ok(if n == 0 { 0.0 } else { s / n as f64 })
+}
+
 /// Mean LDR-FLIP error after tone mapping both images with `ldr`.
 pub fn flip(a: &Image, reference: &Image, ldr: LdrSettings) -> Result<f64, MetricsError> {
     check(a, reference)?;

@@ -3,11 +3,13 @@
 //! both sides (no environment, no ambient term): what the mirror shows is then each visible
 //! point's direct light, which the path tracer reaches at depth 2 (the mirror, then the point).
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use lightlab_core::image::Image;
+use lightlab_core::metrics::relmse_masked;
 use lightlab_gpu::raster::{Ambient, RasterSettings, RenderPath, Renderer, ShadowMethod};
 use lightlab_gpu::test_context;
 use lightlab_scene::{Camera, Scene, builtin};
+use lightlab_trace::render::coverage_mask;
 use lightlab_trace::{Accel, PathTracer, RenderSettings};
 
 const W: u32 = 96;
@@ -51,46 +53,12 @@ fn reference(scene: &Scene) -> Image {
 
 /// Pixels whose 3 × 3 sub-pixel rays all hit the mirror (its inside, not its edges).
 fn mirror_pixels(scene: &Scene) -> Vec<bool> {
-    let accel = Accel::new(scene);
     let mirror = scene
         .instances
         .iter()
         .position(|i| i.name == "mirror")
-        .unwrap() as u32;
-    let cam = &scene.cameras[0];
-    let aspect = W as f32 / H as f32;
-    let mut mask = vec![];
-    for y in 0..H {
-        for x in 0..W {
-            let all = (0..9).all(|k| {
-                let f = Vec2::new(
-                    x as f32 + 0.1 + 0.4 * (k % 3) as f32,
-                    y as f32 + 0.1 + 0.4 * (k / 3) as f32,
-                );
-                let ndc = Vec2::new(2.0 * f.x / W as f32 - 1.0, 1.0 - 2.0 * f.y / H as f32);
-                let d = cam.ray_direction(ndc, aspect);
-                accel
-                    .intersect(cam.position(), d, f32::INFINITY)
-                    .is_some_and(|h| h.prim.instance == mirror)
-            });
-            mask.push(all);
-        }
-    }
-    mask
-}
-
-/// relMSE (mean of (a−b)²/(b²+0.01)) over the masked pixels.
-fn relmse_on(a: &Image, b: &Image, mask: &[bool]) -> f64 {
-    let mut s = 0.0f64;
-    let mut n = 0usize;
-    for ((x, y), _) in a.data.iter().zip(&b.data).zip(mask).filter(|(_, m)| **m) {
-        for c in 0..3 {
-            let (x, y) = (x[c] as f64, y[c] as f64);
-            s += (x - y) * (x - y) / (y * y + 0.01);
-        }
-        n += 3;
-    }
-    s / n as f64
+        .unwrap();
+    coverage_mask(scene, &scene.cameras[0], W, H, &[mirror])
 }
 
 fn check_view(scene: &Scene, label: &str) -> f64 {
@@ -120,8 +88,8 @@ fn check_view(scene: &Scene, label: &str) -> f64 {
             .write(&dir.join(format!("mirror-{label}-gpu.png")), ldr)
             .unwrap();
     }
-    let err = relmse_on(&planar, &want, &mask);
-    let without = relmse_on(&gpu(scene, RenderPath::Forward, false), &want, &mask);
+    let err = relmse_masked(&planar, &want, &mask).unwrap();
+    let without = relmse_masked(&gpu(scene, RenderPath::Forward, false), &want, &mask).unwrap();
     eprintln!(
         "{label}: mirror pixels {count}: planar mirror relMSE {err:.5}, without {without:.4}"
     );
@@ -153,7 +121,7 @@ fn a_planar_mirror_shows_the_path_traced_reflection() {
     let mask = mirror_pixels(&scene);
     let fwd = gpu(&scene, RenderPath::Forward, true);
     let def = gpu(&scene, RenderPath::Deferred, true);
-    let d = relmse_on(&def, &fwd, &mask);
+    let d = relmse_masked(&def, &fwd, &mask).unwrap();
     eprintln!("deferred against forward on the mirror: {d:.6}");
     assert!(d < 1e-3, "deferred {d}");
 }

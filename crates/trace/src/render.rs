@@ -107,6 +107,41 @@ impl RenderSettings {
     }
 }
 
+/// Per pixel of a `width` × `height` image from `camera`, whether all of its 3 × 3 sub-pixel
+/// rays first hit one of `instances` (its inside, not its edges): the pixels on which
+/// techniques are compared for one object.
+pub fn coverage_mask(
+    scene: &Scene,
+    camera: &lightlab_scene::Camera,
+    width: u32,
+    height: u32,
+    instances: &[usize],
+) -> Vec<bool> {
+    let accel = Accel::new(scene);
+    let aspect = width as f32 / height as f32;
+    (0..width * height)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            (0..9).all(|k| {
+                let fx = x as f32 + 0.1 + 0.4 * (k % 3) as f32;
+                let fy = y as f32 + 0.1 + 0.4 * (k / 3) as f32;
+                let ndc = glam::Vec2::new(
+                    2.0 * fx / width as f32 - 1.0,
+                    1.0 - 2.0 * fy / height as f32,
+                );
+                accel
+                    .intersect(
+                        camera.position(),
+                        camera.ray_direction(ndc, aspect),
+                        f32::INFINITY,
+                    )
+                    .is_some_and(|h| instances.contains(&(h.prim.instance as usize)))
+            })
+        })
+        .collect()
+}
+
 /// Shading information at a hit.
 pub struct Surface {
     pub p: Vec3,

@@ -9,6 +9,7 @@ mod lens;
 pub mod lightmap;
 mod lpv;
 mod normals;
+pub mod refraction;
 pub mod sh;
 
 use crate::options::{DebugView, TechniqueArgs};
@@ -96,6 +97,12 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
             req.technique
         );
     }
+    if req.args.refraction_field.is_some() && req.technique.family() != Family::Phong {
+        bail!(
+            "--refraction-field refracts through the Phong techniques (phong,              phong-shadow-volumes, phong-shadow-maps, canned-light, lightfield-refraction); not              '{}'",
+            req.technique
+        );
+    }
     let mut sh_light = None;
     let renderer = match req.technique.family() {
         Family::PathTraced => bail!("'{}' is not a GPU technique", req.technique),
@@ -103,6 +110,7 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
             let a = &req.args.raster;
             let shadows = req.technique.shadows(a.shadow_variant)?;
             let mut s = a.settings(shadows, req.width, req.height, req.camera)?;
+            s.refraction_field = refraction::field(req.scene, req.technique, req.args)?;
             match canned::light(req.scene, req.technique, req.args)? {
                 Some(slab) => {
                     // The slab replaces the luminaire's geometry (and its light).

@@ -1,5 +1,5 @@
 //! The specular environment term (Heidrich 1999 ch. 8): the prefiltered maps of
-//! `lightlab_core::envmap` on the GPU (`shaders/env.wgsl`, group 2 bindings 20–23), in the
+//! `lightlab_core::envmap` on the GPU (`shaders/env.wgsl`, group 2 bindings 20–26; 25 the planar mirrors' views, 26 the refraction field), in the
 //! parameterisation of `--env-map`, with the GGX split-sum table.
 //!
 //! Every lighting pass adds it to glossy and metallic surfaces (`base_radiance`), whatever the
@@ -59,6 +59,11 @@ pub struct EnvUniforms {
     pub refraction: u32,
     pub pad2: u32,
     pub pad3: u32,
+    /// The geometry light field's box (`RefractionField::min`, `max`) and (instance + 1 or 0,
+    /// n_uv, n_st, 0).
+    pub field_min: [f32; 4],
+    pub field_max: [f32; 4],
+    pub field: [u32; 4],
 }
 
 /// Per scene instance (WGSL `EnvInstance`, binding 24): its bounding sphere and its dynamic
@@ -79,6 +84,7 @@ pub(super) fn layout_entries() -> Vec<LayoutEntry> {
         buffer(23, wgpu::BufferBindingType::Uniform, false),
         super::bindings::storage(24),
         filtered_texture(25, Dim::D2Array),
+        filtered_texture(26, Dim::D2Array),
     ]
 }
 
@@ -97,6 +103,8 @@ pub(super) struct EnvResources {
     /// The planar mirrors' reflected views, one layer each (`raster::mirror`).
     pub mirror_images: wgpu::Texture,
     mirror_view: wgpu::TextureView,
+    /// The geometry light field's slabs, one atlas layer each (`field_texture`).
+    field: wgpu::TextureView,
 }
 
 /// Which lobes the scene's materials need under `prefilter`.
@@ -291,6 +299,7 @@ impl EnvResources {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         });
+        let field = field_texture(ctx, s.refraction_field.as_ref(), &mut u);
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("environment"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -318,6 +327,7 @@ impl EnvResources {
             summary,
             mirror_images,
             mirror_view,
+            field,
         }
     }
 
@@ -342,8 +352,42 @@ impl EnvResources {
             entry(23, self.uniforms.as_entire_binding()),
             entry(24, self.spheres.as_entire_binding()),
             entry(25, R::TextureView(&self.mirror_view)),
+            entry(26, R::TextureView(&self.field)),
         ]
     }
+}
+
+/// The geometry light field as an `Rgba16Float` array, one slab per layer: an atlas of (u,v)
+/// tiles of (s,t) texels, as `RefractionField::write` lays it out (exit direction, throughput);
+/// its box and counts into `u`. Without a field, a black 1 × 1 array.
+fn field_texture(
+    ctx: &GpuContext,
+    glass: Option<&super::GlassField>,
+    u: &mut EnvUniforms,
+) -> wgpu::TextureView {
+    let Some(g) = glass else {
+        return crate::resources::upload_array(ctx, [1, 1], 1, |_, _| {}).0;
+    };
+    let f = &g.field;
+    u.field_min = f.min.extend(0.0).to_array();
+    u.field_max = f.max.extend(0.0).to_array();
+    u.field = [g.instance as u32 + 1, f.n_uv as u32, f.n_st as u32, 0];
+    let side = (f.n_uv * f.n_st) as u32;
+    crate::resources::upload_array(ctx, [side, side], 6, |layer, texels| {
+        if layer >= 6 {
+            return;
+        }
+        for (k, px) in texels.chunks_exact_mut(4).enumerate() {
+            let (x, y) = (k % side as usize, k / side as usize);
+            let (iu, is) = (x / f.n_st, x % f.n_st);
+            let (iv, it) = (y / f.n_st, y % f.n_st);
+            let v = f.data[f.index(layer as usize, [iu, iv, is, it])];
+            for c in 0..4 {
+                px[c] = half::f16::from_f32(v[c]);
+            }
+        }
+    })
+    .0
 }
 
 /// The instances with dynamic maps (`--dynamic-env`) and each one's first layer, after the
@@ -581,7 +625,10 @@ mod tests {
             pad1,
             refraction,
             pad2,
-            pad3
+            pad3,
+            field_min,
+            field_max,
+            field
         );
         check_struct(src, "EnvUniforms", &layout).unwrap_or_else(|e| panic!("{e}"));
     }

@@ -221,6 +221,16 @@ pub struct RasterSettings {
     /// Draw each planar mirror's reflection from the mirrored eye (`raster::mirror`, up to
     /// four, one level deep); false: mirrors reflect the environment maps like any surface.
     pub planar_mirrors: bool,
+    /// A geometry light field (Heidrich §10.2) for one glass object: its fragments refract
+    /// through the baked exit directions instead of the bounding sphere (`refraction`).
+    pub refraction_field: Option<GlassField>,
+}
+
+/// A glass instance and its geometry light field (`lightlab_core::refraction_field`).
+#[derive(Clone, Debug)]
+pub struct GlassField {
+    pub instance: usize,
+    pub field: std::sync::Arc<lightlab_core::refraction_field::RefractionField>,
 }
 
 /// How a canned light is drawn (§7.2.2): one additive pass per (u,v) grid point, each a spot
@@ -280,6 +290,7 @@ impl Default for RasterSettings {
             env_texels: 2 * 256 * 256,
             light_field: None,
             planar_mirrors: true,
+            refraction_field: None,
         }
     }
 }

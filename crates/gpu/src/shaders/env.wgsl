@@ -33,6 +33,10 @@ struct EnvUniforms {
     refraction: u32,
     pad2: u32,
     pad3: u32,
+    // The geometry light field's box and (instance + 1 or 0, n_uv, n_st, 0).
+    field_min: vec4<f32>,
+    field_max: vec4<f32>,
+    field: vec4<u32>,
 }
 
 // Per scene instance: its bounding sphere (centre, radius) and its dynamic maps (first colour
@@ -50,6 +54,54 @@ struct EnvInstance {
 @group(2) @binding(24) var<storage, read> env_instances: array<EnvInstance>;
 // The planar mirrors' reflected views, pixel-aligned with the frame (raster/mirror.rs).
 @group(2) @binding(25) var env_mirrors: texture_2d_array<f32>;
+
+// The geometry light field (Heidrich 1999 §10.2, core/src/refraction_field.rs): one slab per
+// layer, an atlas of (u,v) tiles of (s,t) texels holding (exit direction, throughput).
+@group(2) @binding(26) var env_field: texture_2d_array<f32>;
+
+// Component i of v (no dynamic vector index on every backend).
+fn env_comp(v: vec3<f32>, i: u32) -> f32 {
+    return select(select(v.z, v.y, i == 1u), v.x, i == 0u);
+}
+
+// The field at ray (o, d): its slab by d's dominant axis (ties to the lower axis), (u,v) where
+// the ray crosses the box's central plane, (s,t) its slope; quadrilinear as four bilinear reads
+// inside the (u,v) tiles around it. Returns the interpolated (direction, throughput).
+fn env_field_lookup(o: vec3<f32>, d: vec3<f32>) -> vec4<f32> {
+    let c = (env_u.field_min.xyz + env_u.field_max.xyz) * 0.5;
+    let h = (env_u.field_max.xyz - env_u.field_min.xyz) * 0.5;
+    let ad = abs(d);
+    var a = 2u;
+    if ad.x >= ad.y && ad.x >= ad.z {
+        a = 0u;
+    } else if ad.y >= ad.z {
+        a = 1u;
+    }
+    let ua = (a + 1u) % 3u;
+    let va = (a + 2u) % 3u;
+    let da = env_comp(d, a);
+    let p = o + d * ((env_comp(c, a) - env_comp(o, a)) / da);
+    let half_uv = vec2<f32>(env_comp(h, ua), env_comp(h, va)) + env_comp(h, a);
+    let uv = vec2<f32>(env_comp(p, ua) - env_comp(c, ua), env_comp(p, va) - env_comp(c, va)) / half_uv;
+    let st = vec2<f32>(env_comp(d, ua), env_comp(d, va)) / max(abs(da), 1e-6);
+    let layer = 2u * a + u32(da < 0.0);
+    let n_uv = max(f32(env_u.field.y), 2.0);
+    let n_st = max(f32(env_u.field.z), 1.0);
+    let f = clamp((uv * 0.5 + 0.5) * n_uv - 0.5, vec2<f32>(0.0), vec2<f32>(n_uv - 1.0));
+    let i0 = min(floor(f), vec2<f32>(n_uv - 2.0));
+    let w = f - i0;
+    // (s,t) in texels within a tile, off its border so that bilinear reads stay inside.
+    let sti = clamp((st * 0.5 + 0.5) * n_st, vec2<f32>(0.5), vec2<f32>(n_st - 0.5));
+    let side = n_uv * n_st;
+    var sum = vec4<f32>(0.0);
+    for (var k = 0u; k < 4u; k++) {
+        let o2 = vec2<f32>(f32(k & 1u), f32(k >> 1u));
+        let wk = mix(1.0 - w.x, w.x, o2.x) * mix(1.0 - w.y, w.y, o2.y);
+        let at = ((i0 + o2) * n_st + sti) / side;
+        sum += textureSampleLevel(env_field, env_sampler, at, layer, 0.0) * wk;
+    }
+    return sum;
+}
 
 // A planar mirror's reflection (Heidrich 1999 ch. 10 intro): the scene drawn from the mirrored
 // eye, read at this fragment's own pixel, times the surface's Fresnel reflectance at the view
@@ -193,9 +245,15 @@ fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32, base: u32
     let thin = s.thin != 0u;
     let f = select(f1, 2.0 * f1 / (1.0 + f1), thin);
     t = select(t, -v, thin);
+    // The object with a geometry light field: the baked exit direction and throughput of the
+    // camera's ray (the view ray through this fragment), its map read unfiltered.
+    let field = env_field_lookup(frame.camera_pos, safe_normalize(s.p - frame.camera_pos, -v));
+    let use_field = (env_u.field.x == instance + 1u) & !thin;
+    t = select(t, field.xyz, use_field);
+    let through = select(1.0 - f, field.w, use_field);
     let reflected = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
-    let refracted = env_lobe(base, env_u.ggx_set, s.roughness, safe_normalize(t, -v), lod);
-    return reflected * f + s.tint * refracted * (1.0 - f);
+    let refracted = env_lobe(base, env_u.ggx_set, s.roughness, safe_normalize(t, -v), select(lod, 0.0, use_field));
+    return reflected * f + s.tint * refracted * through;
 }
 
 // Distance impostors (Szirmay-Kalos et al. 2005): the direction from the dynamic map's centre

@@ -14,6 +14,7 @@
 
 mod dynamic;
 pub mod geom;
+pub mod glass;
 pub mod luminaire;
 pub mod mirror;
 
@@ -24,7 +25,7 @@ use lightlab_core::image::Image;
 use lightlab_core::sampling::{Rng, uniform_sphere};
 
 /// Names of the built-in scenes, in the order `lightlab scenes` lists them.
-pub const NAMES: [&str; 10] = [
+pub const NAMES: [&str; 11] = [
     "cornell",
     "room",
     "shadows",
@@ -35,6 +36,7 @@ pub const NAMES: [&str; 10] = [
     "prt-dynamic",
     "luminaire",
     "mirror",
+    "glass",
 ];
 
 /// One-line description of a built-in scene.
@@ -54,6 +56,7 @@ pub fn describe(name: &str) -> Option<&'static str> {
         }
         "luminaire" => "small room lit by measured lamps: batwing downlight, wall washer, flood",
         "mirror" => "a wall mirror beside a ball, a box and a pillar: planar reflections",
+        "glass" => "a solid glass torus in a striped studio environment: refraction",
         _ => return None,
     })
 }
@@ -71,6 +74,7 @@ pub fn builtin(name: &str) -> Option<Scene> {
         "prt-dynamic" => dynamic::prt_dynamic(),
         "luminaire" => luminaire::luminaire(),
         "mirror" => mirror::mirror(),
+        "glass" => glass::glass(),
         _ => return None,
     };
     s.name = name.into();
