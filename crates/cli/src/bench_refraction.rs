@@ -51,16 +51,7 @@ fn gpu(
         refraction_field: field,
         ..Default::default()
     };
-    let mut r = Renderer::new(ctx, scene, settings)?;
-    let mut best = f64::MAX;
-    let mut img = None;
-    for _ in 0..3 {
-        let t = Instant::now();
-        r.render(ctx);
-        img = Some(r.read_hdr(ctx)?);
-        best = best.min(t.elapsed().as_secs_f64() * 1e3);
-    }
-    Ok((img.expect("three frames").downsample(2), best))
+    crate::bench_canned::best_of_three(ctx, &mut Renderer::new(ctx, scene, settings)?)
 }
 
 pub fn run(

@@ -222,6 +222,113 @@ fn compare_rejects_different_sizes_and_unreadable_files() {
     assert!(stderr(&o).contains("junk.png"), "{}", stderr(&o));
 }
 
+/// A refraction field baked once serves renders in another environment, and is refused for a
+/// scene whose glass it was not baked for.
+#[test]
+fn refraction_field_bakes_once_and_renders_in_any_environment() {
+    let dir = tempfile::tempdir().unwrap();
+    let field = dir.path().join("field");
+    let f = field.to_str().unwrap();
+    let o = lightlab(&[
+        "bake",
+        "--scene",
+        "glass",
+        "--method",
+        "refraction-field",
+        "--field-uv",
+        "8",
+        "--field-st",
+        "4",
+        "--out",
+        f,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(field.join("field.json").exists() && field.join("slab-5-throughput.exr").exists());
+    // Another environment for the same field: a small render of cornell as the sky.
+    let env = dir.path().join("cornell.exr");
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "cornell",
+        "--technique",
+        "reference",
+        "--width",
+        "16",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+        "-o",
+        env.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    if lightlab_gpu::test_context().is_some() {
+        let out = dir.path().join("glass.png");
+        let o = lightlab(&[
+            "render",
+            "--scene",
+            "glass",
+            "--technique",
+            "phong",
+            "--refraction-field",
+            f,
+            "--env",
+            env.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(!stderr(&o).contains("baking"), "no re-bake: {}", stderr(&o));
+        assert!(out.exists());
+    }
+    // The field belongs to the torus: `spheres`'s glass ball has another box.
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "spheres",
+        "--technique",
+        "phong",
+        "--refraction-field",
+        f,
+        "-o",
+        dir.path().join("x.png").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("bake it again"), "{}", stderr(&o));
+    // Only the Phong techniques read it.
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "glass",
+        "--technique",
+        "lpv",
+        "--refraction-field",
+        f,
+        "-o",
+        dir.path().join("y.png").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--refraction-field"), "{}", stderr(&o));
+    // A folder that is not a field.
+    let o = lightlab(&[
+        "render",
+        "--scene",
+        "glass",
+        "--technique",
+        "phong",
+        "--refraction-field",
+        dir.path().to_str().unwrap(),
+        "-o",
+        dir.path().join("z.png").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("field.json"), "{}", stderr(&o));
+}
+
 #[test]
 fn bake_methods_that_do_not_apply_say_what_to_do() {
     // A light slab needs a luminaire: the error says how to mark one.
@@ -229,6 +336,14 @@ fn bake_methods_that_do_not_apply_say_what_to_do() {
     assert_eq!(o.status.code(), Some(1));
     assert!(
         stderr(&o).contains("extras.lightlab.luminaire"),
+        "{}",
+        stderr(&o)
+    );
+    // A refraction field needs solid glass: the error says what makes glass solid.
+    let o = lightlab(&["bake", "--scene", "cornell", "--method", "refraction-field"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("KHR_materials_volume"),
         "{}",
         stderr(&o)
     );

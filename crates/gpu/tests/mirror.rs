@@ -125,3 +125,112 @@ fn a_planar_mirror_shows_the_path_traced_reflection() {
     eprintln!("deferred against forward on the mirror: {d:.6}");
     assert!(d < 1e-3, "deferred {d}");
 }
+
+/// A glTF file written by hand (not by lightlab): a floor, a metallic roughness-0 quad as the
+/// mirror, and a red panel behind the camera that only the mirror shows.
+fn hand_written_gltf(dir: &std::path::Path) -> std::path::PathBuf {
+    let quads: [[[f32; 3]; 4]; 3] = [
+        // Floor (+Y), mirror (+Z, at z = −1), red panel (−Z, at z = 3: behind the camera).
+        [
+            [-3.0, 0.0, 3.5],
+            [3.0, 0.0, 3.5],
+            [3.0, 0.0, -2.0],
+            [-3.0, 0.0, -2.0],
+        ],
+        [
+            [-1.0, 0.2, -1.0],
+            [1.0, 0.2, -1.0],
+            [1.0, 1.6, -1.0],
+            [-1.0, 1.6, -1.0],
+        ],
+        [
+            [0.8, 0.0, 3.0],
+            [-0.8, 0.0, 3.0],
+            [-0.8, 1.8, 3.0],
+            [0.8, 1.8, 3.0],
+        ],
+    ];
+    let normals = [[0.0f32, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+    let mut bin: Vec<u8> = vec![];
+    for q in &quads {
+        for p in q {
+            bin.extend(p.iter().flat_map(|v| v.to_le_bytes()));
+        }
+    }
+    for n in &normals {
+        for _ in 0..4 {
+            bin.extend(n.iter().flat_map(|v| v.to_le_bytes()));
+        }
+    }
+    for k in 0..3u16 {
+        for i in [0u16, 1, 2, 0, 2, 3] {
+            bin.extend((4 * k + i).to_le_bytes());
+        }
+    }
+    std::fs::write(dir.join("room.bin"), &bin).unwrap();
+    let gltf = r#"{"asset":{"version":"2.0","generator":"written by hand"},"scene":0,
+"scenes":[{"nodes":[0,1,2,3,4]}],
+"buffers":[{"uri":"room.bin","byteLength":324}],
+"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":144},{"buffer":0,"byteOffset":144,"byteLength":144},
+ {"buffer":0,"byteOffset":288,"byteLength":36}],
+"accessors":[
+ {"bufferView":0,"componentType":5126,"count":12,"type":"VEC3","min":[-3,0,-2],"max":[3,1.8,3.5]},
+ {"bufferView":1,"componentType":5126,"count":12,"type":"VEC3"},
+ {"bufferView":2,"byteOffset":0,"componentType":5123,"count":6,"type":"SCALAR"},
+ {"bufferView":2,"byteOffset":12,"componentType":5123,"count":6,"type":"SCALAR"},
+ {"bufferView":2,"byteOffset":24,"componentType":5123,"count":6,"type":"SCALAR"}],
+"materials":[
+ {"name":"floor","pbrMetallicRoughness":{"baseColorFactor":[0.6,0.6,0.6,1],"metallicFactor":0,"roughnessFactor":1}},
+ {"name":"mirror","pbrMetallicRoughness":{"baseColorFactor":[0.9,0.9,0.9,1],"metallicFactor":1,"roughnessFactor":0}},
+ {"name":"red","pbrMetallicRoughness":{"baseColorFactor":[0.8,0.1,0.1,1],"metallicFactor":0,"roughnessFactor":1}}],
+"meshes":[
+ {"primitives":[{"attributes":{"POSITION":0,"NORMAL":1},"indices":2,"material":0}]},
+ {"primitives":[{"attributes":{"POSITION":0,"NORMAL":1},"indices":3,"material":1}]},
+ {"primitives":[{"attributes":{"POSITION":0,"NORMAL":1},"indices":4,"material":2}]}],
+"cameras":[{"type":"perspective","perspective":{"yfov":0.9,"znear":0.05,"aspectRatio":1.333}}],
+"extensionsUsed":["KHR_lights_punctual"],
+"extensions":{"KHR_lights_punctual":{"lights":[{"type":"point","intensity":6,"color":[1,1,1]}]}},
+"nodes":[
+ {"name":"floor","mesh":0},{"name":"mirror","mesh":1},{"name":"panel","mesh":2},
+ {"name":"camera","camera":0,"translation":[0.3,1.0,2.2],"rotation":[-0.05,0,0,0.9987]},
+ {"name":"lamp","translation":[0,2.2,1.5],"extensions":{"KHR_lights_punctual":{"light":0}}}]}"#;
+    let path = dir.join("room.gltf");
+    std::fs::write(&path, gltf).unwrap();
+    path
+}
+
+#[test]
+fn a_mirror_in_a_hand_written_gltf_shows_what_is_behind_the_camera() {
+    if test_context().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = hand_written_gltf(dir.path());
+    let scene = lightlab_scene::load(path.to_str().unwrap(), Default::default()).unwrap();
+    let found = lightlab_gpu::raster::mirror::find(&scene);
+    assert_eq!(found.len(), 1, "one planar mirror");
+    assert_eq!(scene.instances[found[0].instance].name, "mirror");
+    let mask = coverage_mask(&scene, &scene.cameras[0], W, H, &[found[0].instance]);
+    let count = mask.iter().filter(|m| **m).count();
+    assert!(count > 500, "the camera sees the mirror ({count})");
+    let want = reference(&scene);
+    let planar = gpu(&scene, RenderPath::Forward, true);
+    let err = relmse_masked(&planar, &want, &mask).unwrap();
+    // The red panel behind the camera, seen in the mirror.
+    let red = |img: &Image| {
+        img.data
+            .iter()
+            .zip(&mask)
+            .filter(|(p, m)| **m && p.x > 2.0 * p.y && p.x > 0.02)
+            .count()
+    };
+    let (red_ref, red_gpu) = (red(&want), red(&planar));
+    eprintln!(
+        "hand-written glTF: {count} mirror pixels, relMSE {err:.5}, red pixels {red_gpu} (reference {red_ref})"
+    );
+    assert!(
+        red_ref > 50,
+        "the reference shows the panel in the mirror ({red_ref})"
+    );
+    assert!(err <= 0.01, "relMSE {err}");
+}

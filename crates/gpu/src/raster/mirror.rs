@@ -69,16 +69,23 @@ pub fn find(scene: &Scene) -> Vec<PlanarMirror> {
         if inst.luminaire.is_some() || !mirror_material(mat) || mesh.indices.len() < 3 {
             continue;
         }
-        let points: Vec<Vec3> = mesh
-            .positions
-            .iter()
-            .map(|p| inst.transform.transform_point3(*p))
-            .collect();
+        // Only the vertices the triangles use: glTF primitives may share a larger accessor.
+        let mut used = vec![false; mesh.positions.len()];
+        for &i in &mesh.indices {
+            if let Some(u) = used.get_mut(i as usize) {
+                *u = true;
+            }
+        }
+        let world = |i: u32| inst.transform.transform_point3(mesh.positions[i as usize]);
         let mut area_normal = Vec3::ZERO;
         for t in mesh.indices.chunks_exact(3) {
-            let [a, b, c] = [0, 1, 2].map(|k| points[t[k] as usize]);
+            let [a, b, c] = [0, 1, 2].map(|k| world(t[k]));
             area_normal += (b - a).cross(c - a);
         }
+        let points: Vec<Vec3> = (0..mesh.positions.len() as u32)
+            .filter(|&i| used[i as usize])
+            .map(world)
+            .collect();
         let area = area_normal.length() * 0.5;
         if area <= 1e-8 {
             continue;
