@@ -67,8 +67,8 @@ fn small_slab(a: &mut TechniqueArgs) {
 }
 
 fn small_field(a: &mut TechniqueArgs) {
-    a.bake.field.field_uv = 16;
-    a.bake.field.field_st = 8;
+    a.bake.field.field_uv = Some(16);
+    a.bake.field.field_st = Some(8);
 }
 
 fn lpv_indirect(a: &mut TechniqueArgs) {

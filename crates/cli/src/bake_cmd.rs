@@ -6,6 +6,7 @@ use crate::progress::with_progress_bar;
 use crate::techniques::lightmap::bake_with_progress;
 use anyhow::{Result, bail};
 use lightlab_bake::{Method, output};
+use lightlab_core::object_field::FieldKind;
 use lightlab_scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -61,12 +62,15 @@ pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool)
         return bake_light_field(scene, out, args, json);
     }
     if method == "refraction-field" {
-        return bake_refraction_field(scene, out, args, json);
+        return bake_object_field(scene, FieldKind::Geometry, out, args, json);
+    }
+    if method == "radiance-field" {
+        return bake_object_field(scene, FieldKind::Radiance, out, args, json);
     }
     let Some(m) = Method::parse(method) else {
         bail!(
             "unknown bake method '{method}' (known: {}, sh, prt-textured, shl, prt, light-field, \
-             refraction-field)",
+             refraction-field, radiance-field)",
             Method::NAMES.join(", ")
         );
     };
@@ -110,18 +114,31 @@ pub fn run(scene: &Scene, method: &str, out: &Path, args: &BakeArgs, json: bool)
     Ok(())
 }
 
-/// `lightlab bake --method refraction-field`: a glass object's geometry light field (Heidrich
-/// §10.2); the folder holds `field.json`, two EXR atlases per slab and the bake manifest.
-fn bake_refraction_field(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
+/// `lightlab bake --method refraction-field|radiance-field`: a glass object's geometry light
+/// field (Heidrich §10.2) or a glossy object's radiance light field (§10.1); the folder holds
+/// `field.json`, two EXR atlases per slab and the bake manifest.
+fn bake_object_field(
+    scene: &Scene,
+    kind: FieldKind,
+    out: &Path,
+    args: &BakeArgs,
+    json: bool,
+) -> Result<()> {
     let t = std::time::Instant::now();
-    let (instance, field) = crate::techniques::refraction::bake(scene, &args.field)?;
+    let (instance, field) =
+        crate::techniques::refraction::bake(scene, kind, &args.field, args.bake_seed)?;
     let seconds = t.elapsed().as_secs_f64();
+    let method = match kind {
+        FieldKind::Geometry => "refraction-field",
+        FieldKind::Radiance => "radiance-field",
+    };
     let stats = serde_json::json!({
-        "method": "refraction-field",
+        "method": method,
         "scene": scene.name,
-        "glass": scene.instances[instance].name,
+        "object": scene.instances[instance].name,
         "n_uv": field.n_uv,
         "n_st": field.n_st,
+        "spp": (kind == FieldKind::Radiance).then_some(args.field.field_spp),
         "gpu_bytes": field.gpu_bytes(),
         "seconds": seconds,
     });
@@ -133,8 +150,7 @@ fn bake_refraction_field(scene: &Scene, out: &Path, args: &BakeArgs, json: bool)
         Ok(manifest)
     })?;
     eprintln!(
-        "baked {}'s glass '{}' into a 6 × {}² × {}² refraction field ({:.1} MB) in {seconds:.1} s; \
-         wrote {}",
+        "baked {}'s '{}' into a 6 × {}² × {}² {method} ({:.1} MB) in {seconds:.1} s; wrote {}",
         scene.name,
         scene.instances[instance].name,
         field.n_uv,

@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 use lightlab_core::image::Image;
 use lightlab_core::metrics::relmse_masked;
 use lightlab_gpu::GpuContext;
-use lightlab_gpu::raster::{GlassField, RasterSettings, Renderer, ShadowMethod};
+use lightlab_gpu::raster::{FieldObject, RasterSettings, Renderer, ShadowMethod};
 use lightlab_scene::Scene;
 use lightlab_trace::refraction_field::glass_instances;
 use lightlab_trace::render::coverage_mask;
@@ -41,14 +41,14 @@ pub struct RefractionBenchArgs {
 fn gpu(
     ctx: &GpuContext,
     scene: &Scene,
-    field: Option<GlassField>,
+    field: Option<FieldObject>,
     a: &RefractionBenchArgs,
 ) -> Result<(Image, f64)> {
     let settings = RasterSettings {
         width: 2 * a.width,
         height: 2 * a.height,
         shadows: ShadowMethod::Map,
-        refraction_field: field,
+        object_field: field,
         ..Default::default()
     };
     crate::bench_canned::best_of_three(ctx, &mut Renderer::new(ctx, scene, settings)?)
@@ -103,15 +103,20 @@ pub fn run(
     for &uv in &a.uv {
         for &st in &a.st {
             let args = FieldArgs {
-                field_uv: uv,
-                field_st: st,
+                field_uv: Some(uv),
+                field_st: Some(st),
                 ..field.clone()
             };
             let t = Instant::now();
-            let (instance, baked) = crate::techniques::refraction::bake(&scene, &args)?;
+            let (instance, baked) = crate::techniques::refraction::bake(
+                &scene,
+                lightlab_core::object_field::FieldKind::Geometry,
+                &args,
+                0,
+            )?;
             let bake_s = t.elapsed().as_secs_f64();
             let mb = baked.gpu_bytes() as f64 / 1e6;
-            let g = GlassField {
+            let g = FieldObject {
                 instance,
                 field: Arc::new(baked),
             };

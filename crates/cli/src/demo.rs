@@ -191,9 +191,11 @@ fn demo_techniques(scene: &str) -> Vec<Technique> {
     families
         .into_iter()
         .flat_map(Technique::of)
-        // Only `luminaire` has a lamp to can, only `glass` and `spheres` solid glass.
+        // Only `luminaire` has a lamp to can, only `glass` and `spheres` solid glass, only
+        // `spheres` glossy metal.
         .filter(|t| *t != Technique::CannedLight || scene == "luminaire")
         .filter(|t| *t != Technique::LightfieldRefraction || matches!(scene, "glass" | "spheres"))
+        .filter(|t| *t != Technique::LightfieldGlossy || scene == "spheres")
         .collect()
 }
 
@@ -237,13 +239,21 @@ fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
             bounces: Some(1),
             ..Default::default()
         },
-        // `canned-light`'s slab of the luminaire.
+        // `canned-light`'s slab of the luminaire, `lightfield-glossy`'s radiance field.
         Family::Phong => BakeArgs {
             slab: crate::options::SlabArgs {
                 slab_samples: match quality {
                     Quality::Preview => 2,
                     Quality::Low => 8,
                     Quality::High => 32,
+                },
+                ..Default::default()
+            },
+            field: crate::options::FieldArgs {
+                field_spp: match quality {
+                    Quality::Preview => 2,
+                    Quality::Low => 16,
+                    Quality::High => 64,
                 },
                 ..Default::default()
             },

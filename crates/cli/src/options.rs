@@ -181,6 +181,12 @@ pub struct TechniqueArgs {
     /// scene's largest solid glass object first.
     #[arg(long, value_name = "DIR")]
     pub refraction_field: Option<PathBuf>,
+    /// A radiance light field (a folder of `bake --method radiance-field`): the Phong
+    /// techniques take the glossy object it was baked for from it, all but the scene's
+    /// punctual lights, which they shade per frame (Heidrich §10.1). `lightfield-glossy`
+    /// without it bakes the scene's smoothest glossy metal first.
+    #[arg(long, value_name = "DIR")]
+    pub radiance_field: Option<PathBuf>,
     /// Pose an animated scene (`prt-dynamic`, or a glTF file with an animation) at frame K,
     /// in the reference and in every technique alike. The light-map and SH techniques bake
     /// the rest pose and move the objects: a moving object's SH transfer holds its own
@@ -695,28 +701,49 @@ pub struct BakeArgs {
     pub field: FieldArgs,
 }
 
-/// `--method refraction-field`: a glass object's geometry light field (Heidrich §10.2).
+/// `--method refraction-field|radiance-field`: a glass object's geometry light field
+/// (Heidrich §10.2), or a glossy object's radiance light field (§10.1).
 #[derive(Args, Clone, Debug)]
 pub struct FieldArgs {
-    /// The glass instance (by name); default: the scene's largest solid, smooth glass object.
+    /// The object (instance name); default: the scene's largest solid, smooth glass object
+    /// (refraction), or its smoothest glossy metal, roughness ≥ 0.05 (radiance).
     #[arg(long)]
-    pub glass: Option<String>,
-    /// (u,v) samples per side of each of the six slabs (where rays cross the object's box).
-    /// Where the ray crosses the object matters more than its slope: at equal memory
-    /// (12.6 MB) 64² × 8² scores 0.029 on `glass`, 32² × 16² 0.041 (`bench refraction`).
-    #[arg(long, default_value_t = 64)]
-    pub field_uv: usize,
-    /// (s,t) samples per side of each slab (the rays' slopes).
-    #[arg(long, default_value_t = 8)]
-    pub field_st: usize,
+    pub field_object: Option<String>,
+    /// (u,v) samples per side of each of the six slabs (where rays cross the object's box);
+    /// default 64 for refraction, 16 for radiance. Refraction varies most with where a ray
+    /// crosses (at equal memory 64² × 8² scores 0.029 on `glass`, 32² × 16² 0.041), a glossy
+    /// reflection with its direction (16² × 32² scores 0.046 on `spheres`'s silver ball,
+    /// 32² × 8² 0.12).
+    #[arg(long)]
+    pub field_uv: Option<usize>,
+    /// (s,t) samples per side of each slab (the rays' slopes); default 8 for refraction, 32 for
+    /// radiance.
+    #[arg(long)]
+    pub field_st: Option<usize>,
+    /// Radiance fields: paths per sample ray.
+    #[arg(long, default_value_t = 16)]
+    pub field_spp: u32,
+}
+
+impl FieldArgs {
+    /// (u,v) and (s,t) samples per side for a field of `kind`.
+    pub fn sizes(&self, kind: lightlab_core::object_field::FieldKind) -> [usize; 2] {
+        use lightlab_core::object_field::FieldKind;
+        let (uv, st) = match kind {
+            FieldKind::Geometry => (64, 8),
+            FieldKind::Radiance => (16, 32),
+        };
+        [self.field_uv.unwrap_or(uv), self.field_st.unwrap_or(st)]
+    }
 }
 
 impl Default for FieldArgs {
     fn default() -> Self {
         FieldArgs {
-            glass: None,
-            field_uv: 64,
-            field_st: 8,
+            field_object: None,
+            field_uv: None,
+            field_st: None,
+            field_spp: 16,
         }
     }
 }

@@ -16,6 +16,7 @@ pub enum Technique {
     PhongShadowMaps,
     CannedLight,
     LightfieldRefraction,
+    LightfieldGlossy,
     Lightmap,
     LightmapPhong,
     PrtVertex,
@@ -100,6 +101,7 @@ pub const REGISTRY: &[Entry] = {
         entry(T::PhongShadowMaps, "phong-shadow-maps", F::Phong, "Phong with shadow maps (Heidrich ch. 6)"),
         entry(T::CannedLight, "canned-light", F::Phong, "shadow-mapped Phong with the luminaire as a light slab (Heidrich ch. 7)"),
         entry(T::LightfieldRefraction, "lightfield-refraction", F::Phong, "shadow-mapped Phong, glass refracting through its geometry light field (Heidrich §10.2)"),
+        entry(T::LightfieldGlossy, "lightfield-glossy", F::Phong, "shadow-mapped Phong, a glossy object's indirect light from its light field (Heidrich §10.1)"),
         entry(T::Lightmap, "lightmap", F::Lightmap, "baked light only (Fuchs §3.4)"),
         entry(T::LightmapPhong, "lightmap+phong", F::Lightmap, "baked indirect light + real-time lights with shadow volumes"),
         entry(T::PrtVertex, "prt-vertex", F::Sh, "per-vertex PRT (McKenzie Chapter ch. 4)"),
@@ -180,6 +182,7 @@ impl Technique {
                 T::PhongShadowMaps
                 | T::CannedLight
                 | T::LightfieldRefraction
+                | T::LightfieldGlossy
                 | T::Lpv
                 | T::LpvFaithful,
                 None | Some(V::Depth),
@@ -188,6 +191,7 @@ impl Technique {
                 T::PhongShadowMaps
                 | T::CannedLight
                 | T::LightfieldRefraction
+                | T::LightfieldGlossy
                 | T::Lpv
                 | T::LpvFaithful,
                 Some(V::Linear),

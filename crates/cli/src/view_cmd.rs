@@ -58,9 +58,12 @@ pub fn view(a: &ViewArgs) -> Result<()> {
     // `lightfield-refraction` needs solid glass to bake, or a field.
     let glass = a.gpu.refraction_field.is_some()
         || !lightlab_trace::refraction_field::glass_instances(&scene).is_empty();
+    let glossy = a.gpu.radiance_field.is_some()
+        || !lightlab_trace::radiance_field::glossy_instances(&scene).is_empty();
     let techniques: Vec<Technique> = Technique::gpu()
         .filter(|t| canned || *t != Technique::CannedLight)
         .filter(|t| glass || *t != Technique::LightfieldRefraction)
+        .filter(|t| glossy || *t != Technique::LightfieldGlossy)
         .collect();
     let first = techniques
         .iter()

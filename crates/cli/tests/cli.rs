@@ -934,6 +934,13 @@ fn viewer_window_shows_what_render_writes() {
                     .map(String::from)
                     .to_vec(),
             ),
+            // A small radiance field of the silver ball.
+            "lightfield-glossy" => (
+                "spheres",
+                ["--field-uv", "4", "--field-st", "4", "--field-spp", "1"]
+                    .map(String::from)
+                    .to_vec(),
+            ),
             _ => ("shadows", vec![]),
         };
         if t == "shl-compressed" {

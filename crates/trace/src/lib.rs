@@ -9,6 +9,7 @@ pub mod accel;
 pub mod bsdf;
 pub mod lights;
 pub mod luminaire;
+pub mod radiance_field;
 pub mod refraction_field;
 pub mod render;
 

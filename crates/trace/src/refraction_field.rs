@@ -1,4 +1,4 @@
-//! Baking a geometry light field (`lightlab_core::refraction_field`, Heidrich 1999 §10.2): every
+//! Baking a geometry light field (`lightlab_core::object_field`, Heidrich 1999 §10.2): every
 //! sample ray of the six slabs around a glass object traced through it — refracted at each
 //! interface by its index, reflected under total internal reflection — to the direction it
 //! leaves in, with the product of the Fresnel transmittances it kept.
@@ -6,7 +6,7 @@
 use crate::accel::Accel;
 use crate::render::surface;
 use glam::{Vec3, Vec4};
-use lightlab_core::refraction_field::RefractionField;
+use lightlab_core::object_field::ObjectField;
 use lightlab_scene::Scene;
 use rayon::prelude::*;
 
@@ -69,7 +69,7 @@ fn exit(scene: &Scene, accel: &Accel, ior: f32, o: Vec3, d: Vec3, eps: f32) -> V
 /// The geometry light field of instance `instance` of `scene`: `n_uv`² × `n_st`² samples per
 /// slab, traced through that instance alone with its material's index. None when the instance
 /// has no geometry.
-pub fn bake(scene: &Scene, instance: usize, n_uv: usize, n_st: usize) -> Option<RefractionField> {
+pub fn bake(scene: &Scene, instance: usize, n_uv: usize, n_st: usize) -> Option<ObjectField> {
     let mut object = scene.clone();
     object.instances = vec![scene.instances[instance].clone()];
     object.lights.clear();
@@ -77,7 +77,7 @@ pub fn bake(scene: &Scene, instance: usize, n_uv: usize, n_st: usize) -> Option<
     let ior = scene.materials[scene.meshes[scene.instances[instance].mesh].material].ior;
     let (lo, hi) = scene.instance_bounds(instance)?;
     let pad = (hi - lo).max_element() * 1e-3;
-    let mut field = RefractionField::straight(lo - pad, hi + pad, n_uv, n_st);
+    let mut field = ObjectField::straight(lo - pad, hi + pad, n_uv, n_st);
     let reach = 2.0 * (field.max - field.min).length();
     let eps = 1e-4 * (field.max - field.min).max_element();
     let rows: Vec<(usize, usize)> = (0..6)

@@ -97,9 +97,13 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
             req.technique
         );
     }
-    if req.args.refraction_field.is_some() && req.technique.family() != Family::Phong {
+    if (req.args.refraction_field.is_some() || req.args.radiance_field.is_some())
+        && req.technique.family() != Family::Phong
+    {
         bail!(
-            "--refraction-field refracts through the Phong techniques (phong,              phong-shadow-volumes, phong-shadow-maps, canned-light, lightfield-refraction); not              '{}'",
+            "--refraction-field and --radiance-field are read by the Phong techniques (phong, \
+             phong-shadow-volumes, phong-shadow-maps, canned-light, lightfield-refraction, \
+             lightfield-glossy); not '{}'",
             req.technique
         );
     }
@@ -110,7 +114,7 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
             let a = &req.args.raster;
             let shadows = req.technique.shadows(a.shadow_variant)?;
             let mut s = a.settings(shadows, req.width, req.height, req.camera)?;
-            s.refraction_field = refraction::field(req.scene, req.technique, req.args)?;
+            s.object_field = refraction::field(req.scene, req.technique, req.args)?;
             match canned::light(req.scene, req.technique, req.args)? {
                 Some(slab) => {
                     // The slab replaces the luminaire's geometry (and its light).

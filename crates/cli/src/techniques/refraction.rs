@@ -1,33 +1,46 @@
-//! Geometry light fields (Heidrich §10.2) in the techniques: the field of `--refraction-field
-//! DIR`, or of the scene's largest solid glass object baked first (`lightfield-refraction`),
-//! through which the Phong techniques refract that object.
+//! Object light fields (Heidrich ch. 10) in the techniques: a glass object's geometry light
+//! field (§10.2; `--refraction-field DIR`, or baked first by `lightfield-refraction`) or a
+//! glossy object's radiance light field (§10.1; `--radiance-field DIR`, or baked first by
+//! `lightfield-glossy`), which the Phong techniques read for that object.
 
 use crate::options::{FieldArgs, TechniqueArgs};
 use crate::technique::Technique;
 use anyhow::{Context, Result, bail};
-use lightlab_core::refraction_field::RefractionField;
-use lightlab_gpu::raster::GlassField;
+use lightlab_core::object_field::{FieldKind, ObjectField};
+use lightlab_gpu::raster::FieldObject;
 use lightlab_scene::Scene;
-use lightlab_trace::refraction_field::{bake as bake_field, glass_instances};
+use lightlab_trace::radiance_field::glossy_instances;
+use lightlab_trace::refraction_field::glass_instances;
+use std::path::Path;
 use std::sync::Arc;
 
-/// The glass instance `a.glass` names (or the scene's largest) and its field, baked now.
-pub fn bake(scene: &Scene, a: &FieldArgs) -> Result<(usize, RefractionField)> {
-    for (n, what) in [(a.field_uv, "--field-uv"), (a.field_st, "--field-st")] {
-        anyhow::ensure!((2..=256).contains(&n), "{what} must be 2 to 256 (got {n})");
+/// The instances a field of `kind` is for, in the order the default picks.
+fn candidates(scene: &Scene, kind: FieldKind) -> Vec<usize> {
+    match kind {
+        FieldKind::Geometry => glass_instances(scene),
+        FieldKind::Radiance => glossy_instances(scene),
     }
-    let glass = glass_instances(scene);
-    let instance = match &a.glass {
-        Some(name) => *glass
+}
+
+/// The object `a.field_object` names (or the default of `kind`).
+fn object(scene: &Scene, kind: FieldKind, a: &FieldArgs) -> Result<usize> {
+    let found = candidates(scene, kind);
+    let what = match kind {
+        FieldKind::Geometry => "solid glass",
+        FieldKind::Radiance => "glossy",
+    };
+    match &a.field_object {
+        Some(name) => found
             .iter()
-            .find(|&&i| scene.instances[i].name == *name)
+            .copied()
+            .find(|&i| scene.instances[i].name == *name)
             .with_context(|| {
-                let names: Vec<&str> = glass
+                let names: Vec<&str> = found
                     .iter()
                     .map(|&i| scene.instances[i].name.as_str())
                     .collect();
                 format!(
-                    "{} has no solid glass instance '{name}' (it has: {})",
+                    "{} has no {what} instance '{name}' (it has: {})",
                     scene.name,
                     if names.is_empty() {
                         "none".into()
@@ -35,25 +48,53 @@ pub fn bake(scene: &Scene, a: &FieldArgs) -> Result<(usize, RefractionField)> {
                         names.join(", ")
                     }
                 )
-            })?,
-        None => *glass.first().with_context(|| {
-            format!(
+            }),
+        None => found.first().copied().with_context(|| match kind {
+            FieldKind::Geometry => format!(
                 "{} has no solid glass object to bake a refraction field for: one needs a \
                  material with KHR_materials_transmission, KHR_materials_volume (thickness > 0) \
                  and roughness under 0.05 (built-in: `glass`, `spheres`)",
                 scene.name
-            )
-        })?,
-    };
-    let field = bake_field(scene, instance, a.field_uv, a.field_st)
-        .with_context(|| format!("glass instance {instance} has no geometry"))?;
+            ),
+            FieldKind::Radiance => format!(
+                "{} has no glossy object to bake a radiance field for: one needs an opaque \
+                 material with metallic ≥ 0.5 and roughness ≥ 0.05 (built-in: `spheres`)",
+                scene.name
+            ),
+        }),
+    }
+}
+
+/// The field of `kind` for the object `a` names (or the default), baked now.
+pub fn bake(
+    scene: &Scene,
+    kind: FieldKind,
+    a: &FieldArgs,
+    seed: u64,
+) -> Result<(usize, ObjectField)> {
+    let [n_uv, n_st] = a.sizes(kind);
+    for (n, what) in [(n_uv, "--field-uv"), (n_st, "--field-st")] {
+        anyhow::ensure!((2..=256).contains(&n), "{what} must be 2 to 256 (got {n})");
+    }
+    anyhow::ensure!(
+        (1..=65536).contains(&a.field_spp),
+        "--field-spp must be 1 to 65536"
+    );
+    let instance = object(scene, kind, a)?;
+    let field = match kind {
+        FieldKind::Geometry => lightlab_trace::refraction_field::bake(scene, instance, n_uv, n_st),
+        FieldKind::Radiance => {
+            lightlab_trace::radiance_field::bake(scene, instance, [n_uv, n_st], a.field_spp, seed)
+        }
+    }
+    .with_context(|| format!("instance {instance} has no geometry"))?;
     Ok((instance, field))
 }
 
-/// The glass instance of `scene` whose box is the field's (a field is baked for one object).
-fn instance_of(scene: &Scene, field: &RefractionField) -> Option<usize> {
+/// The instance of `scene` whose box is the field's (a field is baked for one object).
+fn instance_of(scene: &Scene, field: &ObjectField) -> Option<usize> {
     let size = (field.max - field.min).max_element();
-    glass_instances(scene).into_iter().find(|&i| {
+    candidates(scene, field.kind).into_iter().find(|&i| {
         scene.instance_bounds(i).is_some_and(|(lo, hi)| {
             let pad = (hi - lo).max_element() * 1e-3;
             (lo - pad - field.min).abs().max_element() <= 1e-3 * size
@@ -62,38 +103,73 @@ fn instance_of(scene: &Scene, field: &RefractionField) -> Option<usize> {
     })
 }
 
-/// The field a GPU technique refracts through: `--refraction-field DIR`, or for
-/// `lightfield-refraction` the scene's glass baked now; None for other techniques without it.
-pub fn field(scene: &Scene, technique: Technique, a: &TechniqueArgs) -> Result<Option<GlassField>> {
-    if let Some(dir) = &a.refraction_field {
-        let field = RefractionField::read(dir)
-            .with_context(|| format!("reading the refraction field in {}", dir.display()))?;
-        let Some(instance) = instance_of(scene, &field) else {
-            bail!(
-                "the refraction field in {} was baked for an object with the box {:.3} … {:.3}; \
-                 no solid glass instance of {} has that box (bake it again for this scene)",
-                dir.display(),
-                field.min,
-                field.max,
-                scene.name
-            );
-        };
-        return Ok(Some(GlassField {
-            instance,
-            field: Arc::new(field),
-        }));
-    }
-    if technique != Technique::LightfieldRefraction {
-        return Ok(None);
-    }
-    let f = &a.bake.field;
-    eprintln!(
-        "no --refraction-field folder: baking {}'s glass into a 6 × {}² × {}² refraction field \
-         now",
-        scene.name, f.field_uv, f.field_st
+/// A field folder of `kind` for `scene`.
+fn read(scene: &Scene, dir: &Path, kind: FieldKind) -> Result<FieldObject> {
+    let field = ObjectField::read(dir)
+        .with_context(|| format!("reading the light field in {}", dir.display()))?;
+    let option = match kind {
+        FieldKind::Geometry => "--refraction-field",
+        FieldKind::Radiance => "--radiance-field",
+    };
+    anyhow::ensure!(
+        field.kind == kind,
+        "{option} {}: this folder holds a {} field",
+        dir.display(),
+        match field.kind {
+            FieldKind::Geometry => "refraction (geometry)",
+            FieldKind::Radiance => "radiance",
+        }
     );
-    let (instance, field) = bake(scene, f)?;
-    Ok(Some(GlassField {
+    let Some(instance) = instance_of(scene, &field) else {
+        bail!(
+            "the light field in {} was baked for an object with the box {:.3} … {:.3}; no \
+             such object of {} has that box (bake it again for this scene)",
+            dir.display(),
+            field.min,
+            field.max,
+            scene.name
+        );
+    };
+    Ok(FieldObject {
+        instance,
+        field: Arc::new(field),
+    })
+}
+
+/// The field a GPU technique reads: `--refraction-field DIR` or `--radiance-field DIR`, or for
+/// `lightfield-refraction` and `lightfield-glossy` the scene's object baked now; None for other
+/// techniques without one.
+pub fn field(
+    scene: &Scene,
+    technique: Technique,
+    a: &TechniqueArgs,
+) -> Result<Option<FieldObject>> {
+    match (&a.refraction_field, &a.radiance_field) {
+        (Some(_), Some(_)) => {
+            bail!("a renderer reads one object light field: --refraction-field or --radiance-field")
+        }
+        (Some(dir), None) => return read(scene, dir, FieldKind::Geometry).map(Some),
+        (None, Some(dir)) => return read(scene, dir, FieldKind::Radiance).map(Some),
+        (None, None) => {}
+    }
+    let kind = match technique {
+        Technique::LightfieldRefraction => FieldKind::Geometry,
+        Technique::LightfieldGlossy => FieldKind::Radiance,
+        _ => return Ok(None),
+    };
+    let f = &a.bake.field;
+    let [n_uv, n_st] = f.sizes(kind);
+    eprintln!(
+        "no field folder: baking a 6 × {n_uv}² × {n_st}² {} light field of {} now",
+        if kind == FieldKind::Geometry {
+            "refraction"
+        } else {
+            "radiance"
+        },
+        scene.name
+    );
+    let (instance, field) = bake(scene, kind, f, a.bake.bake_seed)?;
+    Ok(Some(FieldObject {
         instance,
         field: Arc::new(field),
     }))

@@ -107,7 +107,7 @@ impl GroupLayouts {
                 sampler(18, S::Filtering),
             ],
         );
-        // Shadow maps (0–2), the ambient source's bindings (3..), the environment term's (20–26).
+        // Shadow maps (0–2), the ambient source's bindings (3..), the environment term's (20–25).
         let mut entries = vec![
             texture(0, wgpu::TextureSampleType::Depth, Dim::D2Array),
             sampler(1, S::Comparison),

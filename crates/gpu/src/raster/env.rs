@@ -1,5 +1,6 @@
 //! The specular environment term (Heidrich 1999 ch. 8): the prefiltered maps of
-//! `lightlab_core::envmap` on the GPU (`shaders/env.wgsl`, group 2 bindings 20–26; 25 the planar mirrors' views, 26 the refraction field), in the
+//! `lightlab_core::envmap` on the GPU (`shaders/env.wgsl`, group 2 bindings 20, 21, 23–25; 25 the extras: the split-sum table, the planar mirrors'
+//! views and the object light field), in the
 //! parameterisation of `--env-map`, with the GGX split-sum table.
 //!
 //! Every lighting pass adds it to glossy and metallic surfaces (`base_radiance`), whatever the
@@ -57,10 +58,14 @@ pub struct EnvUniforms {
     /// 1: glass refracts through one interface; 2: through two (the instance's bounding
     /// sphere).
     pub refraction: u32,
-    pub pad2: u32,
-    pub pad3: u32,
-    /// The geometry light field's box (`RefractionField::min`, `max`) and (instance + 1 or 0,
-    /// n_uv, n_st, 0).
+    /// The scene's own punctual lights (the first lights; the ones after them are derived:
+    /// area lights, the environment's sun, a canned light). A radiance field's object takes
+    /// only the scene's own lights per frame.
+    pub scene_lights: u32,
+    /// The object light field's first layer in the extras array (after the mirrors').
+    pub field_layer: u32,
+    /// The object light field's box (`ObjectField::min`, `max`) and (instance + 1 or 0,
+    /// n_uv, n_st, kind: 0 geometry, 1 radiance).
     pub field_min: [f32; 4],
     pub field_max: [f32; 4],
     pub field: [u32; 4],
@@ -80,11 +85,9 @@ pub(super) fn layout_entries() -> Vec<LayoutEntry> {
     vec![
         filtered_texture(20, Dim::D2Array),
         sampler(21, wgpu::SamplerBindingType::Filtering),
-        filtered_texture(22, Dim::D2),
         buffer(23, wgpu::BufferBindingType::Uniform, false),
         super::bindings::storage(24),
         filtered_texture(25, Dim::D2Array),
-        filtered_texture(26, Dim::D2Array),
     ]
 }
 
@@ -94,17 +97,15 @@ pub(super) struct EnvResources {
     /// The dynamic maps' updater (`--dynamic-env`).
     pub dynamic: Option<super::env_dynamic::DynamicEnv>,
     sampler: wgpu::Sampler,
-    lut: wgpu::TextureView,
     uniforms: wgpu::Buffer,
     /// Per instance, its bounding sphere (centre, radius): glass's second interface.
     spheres: wgpu::Buffer,
     /// What the term reflects, for reports: None when it is off.
     pub summary: Option<String>,
-    /// The planar mirrors' reflected views, one layer each (`raster::mirror`).
-    pub mirror_images: wgpu::Texture,
-    mirror_view: wgpu::TextureView,
-    /// The geometry light field's slabs, one atlas layer each (`field_texture`).
-    field: wgpu::TextureView,
+    /// The planar mirrors' reflected views (layer k: mirror k, `raster::mirror`), then the
+    /// object light field's six slabs (`extra_texture`).
+    pub extra: wgpu::Texture,
+    extra_view: wgpu::TextureView,
 }
 
 /// Which lobes the scene's materials need under `prefilter`.
@@ -289,17 +290,18 @@ impl EnvResources {
             }
             u.dynamic_objects = objects.len() as u32;
         }
-        // A planar mirror's fragments read layer k of the mirror images (w = k + 1).
+        // Planar mirror k's fragments read layer k + 1 of the extras (w = k + 1).
         for (k, m) in mirrors.iter().enumerate() {
             instances[m.instance].dynamic[3] = k as u32 + 1;
         }
-        let mirror_images =
-            super::mirror::image_array(ctx, (s.width, s.height), mirrors.len() as u32);
-        let mirror_view = mirror_images.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
-        let field = field_texture(ctx, s.refraction_field.as_ref(), &mut u);
+        let (extra, extra_view) = extra_texture(
+            ctx,
+            (s.width, s.height),
+            mirrors.len(),
+            s.object_field.as_ref(),
+            &mut u,
+        );
+        u.scene_lights = scene.lights.len() as u32;
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("environment"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -322,12 +324,10 @@ impl EnvResources {
             dynamic,
             spheres,
             sampler,
-            lut: upload_lut(ctx),
             uniforms,
             summary,
-            mirror_images,
-            mirror_view,
-            field,
+            extra,
+            extra_view,
         }
     }
 
@@ -348,46 +348,91 @@ impl EnvResources {
         vec![
             entry(20, R::TextureView(&self.maps)),
             entry(21, R::Sampler(&self.sampler)),
-            entry(22, R::TextureView(&self.lut)),
             entry(23, self.uniforms.as_entire_binding()),
             entry(24, self.spheres.as_entire_binding()),
-            entry(25, R::TextureView(&self.mirror_view)),
-            entry(26, R::TextureView(&self.field)),
+            entry(25, R::TextureView(&self.extra_view)),
         ]
     }
 }
 
-/// The geometry light field as an `Rgba16Float` array, one slab per layer: an atlas of (u,v)
-/// tiles of (s,t) texels, as `RefractionField::write` lays it out (exit direction, throughput);
-/// its box and counts into `u`. Without a field, a black 1 × 1 array.
-fn field_texture(
+/// One `Rgba16Float` array for the term's smaller images (one binding: GL allows 16 sampled
+/// textures per stage, and the deferred pass is at that limit): layer 0 the split-sum table
+/// (`LUT_SIZE`² in its top-left corner), then the planar mirrors' reflected views (`mirrors`
+/// layers of `size`, written each frame), then the object light field's six slabs, each an
+/// atlas of (u,v) tiles of (s,t) texels as `ObjectField::write` lays it out, in the top-left
+/// corner of its layer. The field's box, counts and first layer go into `u`. Layers share the
+/// largest size (a field beside mirrors pads to the frame).
+fn extra_texture(
     ctx: &GpuContext,
-    glass: Option<&super::GlassField>,
+    size: (u32, u32),
+    mirrors: usize,
+    field: Option<&super::FieldObject>,
     u: &mut EnvUniforms,
-) -> wgpu::TextureView {
-    let Some(g) = glass else {
-        return crate::resources::upload_array(ctx, [1, 1], 1, |_, _| {}).0;
-    };
-    let f = &g.field;
-    u.field_min = f.min.extend(0.0).to_array();
-    u.field_max = f.max.extend(0.0).to_array();
-    u.field = [g.instance as u32 + 1, f.n_uv as u32, f.n_st as u32, 0];
-    let side = (f.n_uv * f.n_st) as u32;
-    crate::resources::upload_array(ctx, [side, side], 6, |layer, texels| {
-        if layer >= 6 {
-            return;
-        }
-        for (k, px) in texels.chunks_exact_mut(4).enumerate() {
-            let (x, y) = (k % side as usize, k / side as usize);
-            let (iu, is) = (x / f.n_st, x % f.n_st);
-            let (iv, it) = (y / f.n_st, y % f.n_st);
-            let v = f.data[f.index(layer as usize, [iu, iv, is, it])];
-            for c in 0..4 {
-                px[c] = half::f16::from_f32(v[c]);
+) -> (wgpu::Texture, wgpu::TextureView) {
+    let side = field.map_or(0, |g| (g.field.n_uv * g.field.n_st) as u32);
+    let (mut w, mut h) = if mirrors > 0 { size } else { (1, 1) };
+    w = w.max(side).max(LUT_SIZE);
+    h = h.max(side).max(LUT_SIZE);
+    let layers = 1 + mirrors as u32 + if field.is_some() { 6 } else { 0 };
+    let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("environment extras"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            // Two at least: a one-layer texture may not be viewed as an array everywhere.
+            depth_or_array_layers: layers.max(2),
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: super::targets::HDR,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    crate::resources::write_layer(
+        ctx,
+        &tex,
+        0,
+        bytemuck::cast_slice(lut_texels()),
+        LUT_SIZE * 8,
+        [LUT_SIZE, LUT_SIZE],
+    );
+    if let Some(g) = field {
+        let f = &g.field;
+        u.field_min = f.min.extend(0.0).to_array();
+        u.field_max = f.max.extend(0.0).to_array();
+        let kind = match f.kind {
+            lightlab_core::object_field::FieldKind::Geometry => 0,
+            lightlab_core::object_field::FieldKind::Radiance => 1,
+        };
+        u.field = [g.instance as u32 + 1, f.n_uv as u32, f.n_st as u32, kind];
+        u.field_layer = 1 + mirrors as u32;
+        let mut texels = vec![half::f16::ZERO; (side * side * 4) as usize];
+        for slab in 0..6 {
+            for (k, px) in texels.chunks_exact_mut(4).enumerate() {
+                let (x, y) = (k % side as usize, k / side as usize);
+                let (iu, is) = (x / f.n_st, x % f.n_st);
+                let (iv, it) = (y / f.n_st, y % f.n_st);
+                let v = f.data[f.index(slab, [iu, iv, is, it])];
+                for c in 0..4 {
+                    px[c] = half::f16::from_f32(v[c]);
+                }
             }
+            crate::resources::write_layer(
+                ctx,
+                &tex,
+                1 + mirrors as u32 + slab as u32,
+                bytemuck::cast_slice(&texels),
+                side * 8,
+                [side, side],
+            );
         }
-    })
-    .0
+    }
+    let view = tex.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    (tex, view)
 }
 
 /// The instances with dynamic maps (`--dynamic-env`) and each one's first layer, after the
@@ -548,31 +593,15 @@ fn upload_maps(
 }
 
 /// The split-sum table (A, B in red and green), computed once per process.
-fn upload_lut(ctx: &GpuContext) -> wgpu::TextureView {
-    static LUT: std::sync::LazyLock<Vec<[f32; 2]>> =
-        std::sync::LazyLock::new(|| envmap::split_sum_lut(LUT_SIZE, 512));
-    let data: Vec<half::f16> = LUT
-        .iter()
-        .flat_map(|[a, b]| [*a, *b, 0.0, 1.0].map(half::f16::from_f32))
-        .collect();
-    let tex = crate::resources::texture(
-        &ctx.device,
-        "split-sum table",
-        LUT_SIZE,
-        LUT_SIZE,
-        1,
-        wgpu::TextureFormat::Rgba16Float,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-    );
-    crate::resources::write_layer(
-        ctx,
-        &tex,
-        0,
-        bytemuck::cast_slice(&data),
-        LUT_SIZE * 8,
-        [LUT_SIZE, LUT_SIZE],
-    );
-    tex.create_view(&Default::default())
+/// The split-sum table's texels (`LUT_SIZE`², RGBA: A, B, 0, 1), for layer 0 of the extras.
+fn lut_texels() -> &'static [half::f16] {
+    static LUT: std::sync::LazyLock<Vec<half::f16>> = std::sync::LazyLock::new(|| {
+        envmap::split_sum_lut(LUT_SIZE, 512)
+            .iter()
+            .flat_map(|[a, b]| [*a, *b, 0.0, 1.0].map(half::f16::from_f32))
+            .collect()
+    });
+    &LUT
 }
 
 #[cfg(test)]
@@ -624,8 +653,8 @@ mod tests {
             pad0,
             pad1,
             refraction,
-            pad2,
-            pad3,
+            scene_lights,
+            field_layer,
             field_min,
             field_max,
             field

@@ -10,7 +10,7 @@
 //! mirror's plane (the frame's clip plane, tested with the alpha test). Its image is
 //! pixel-aligned with the main camera's: a point x seen in the mirror at pixel p is the point
 //! M·x that the main camera would see at p. The main frame copies it into a layer of the
-//! environment term's mirror array and the mirror's fragments take Fresnel × that pixel
+//! environment term's extras array and the mirror's fragments take Fresnel × that pixel
 //! instead of the environment map (`env_planar_mirror` in env.wgsl).
 //!
 //! Deviation from the seed: Diefenbach marks the reflector in the stencil and draws the
@@ -136,26 +136,6 @@ pub(super) struct Mirror {
     pub(super) active: bool,
 }
 
-/// The mirrors' images, one layer each, that the environment term reads at the mirrors'
-/// fragments (group 2, binding 25): a 1 × 1 layer of black without mirrors.
-pub(super) fn image_array(ctx: &GpuContext, size: (u32, u32), layers: u32) -> wgpu::Texture {
-    let (w, h) = if layers == 0 { (1, 1) } else { size };
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("planar mirrors"),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: layers.max(1),
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: super::targets::HDR,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    })
-}
-
 impl Mirror {
     /// Follow the main camera: the child sees from the mirrored eye (through the same lens
     /// view), clips at the plane on the camera's side, and draws only the mirror's screen
@@ -209,12 +189,13 @@ impl Renderer {
             enc.copy_texture_to_texture(
                 m.child.targets.hdr.as_image_copy(),
                 wgpu::TexelCopyTextureInfo {
-                    texture: &self.env.mirror_images,
+                    texture: &self.env.extra,
                     mip_level: 0,
+                    // Layer 0 holds the split-sum table.
                     origin: wgpu::Origin3d {
                         x: 0,
                         y: 0,
-                        z: k as u32,
+                        z: k as u32 + 1,
                     },
                     aspect: wgpu::TextureAspect::All,
                 },

@@ -36,7 +36,7 @@ mod targets;
 pub use ambient::{LightmapInput, SourceKind};
 pub use settings::{
     Ambient, BadAmbient, CannedLight, CannedPasses, EnvDiffuse, EnvMapKind, EnvPrefilter,
-    FrameTimes, GlassField, MAX_AREA_LIGHTS, RasterError, RasterSettings, Refraction, RenderPath,
+    FieldObject, FrameTimes, MAX_AREA_LIGHTS, RasterError, RasterSettings, Refraction, RenderPath,
     ShadowMethod, projection,
 };
 

@@ -223,14 +223,14 @@ pub struct RasterSettings {
     pub planar_mirrors: bool,
     /// A geometry light field (Heidrich §10.2) for one glass object: its fragments refract
     /// through the baked exit directions instead of the bounding sphere (`refraction`).
-    pub refraction_field: Option<GlassField>,
+    pub object_field: Option<FieldObject>,
 }
 
-/// A glass instance and its geometry light field (`lightlab_core::refraction_field`).
+/// A glass instance and its geometry light field (`lightlab_core::object_field`).
 #[derive(Clone, Debug)]
-pub struct GlassField {
+pub struct FieldObject {
     pub instance: usize,
-    pub field: std::sync::Arc<lightlab_core::refraction_field::RefractionField>,
+    pub field: std::sync::Arc<lightlab_core::object_field::ObjectField>,
 }
 
 /// How a canned light is drawn (§7.2.2): one additive pass per (u,v) grid point, each a spot
@@ -290,7 +290,7 @@ impl Default for RasterSettings {
             env_texels: 2 * 256 * 256,
             light_field: None,
             planar_mirrors: true,
-            refraction_field: None,
+            object_field: None,
         }
     }
 }

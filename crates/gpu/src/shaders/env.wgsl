@@ -31,9 +31,11 @@ struct EnvUniforms {
     pad1: u32,
     // 1: glass refracts through one interface; 2: through two (the instance's bounding sphere).
     refraction: u32,
-    pad2: u32,
-    pad3: u32,
-    // The geometry light field's box and (instance + 1 or 0, n_uv, n_st, 0).
+    // The scene's own punctual lights (derived ones follow: area lights, the sun, a canned light).
+    scene_lights: u32,
+    // The object light field's first layer in env_extra (after the mirrors').
+    field_layer: u32,
+    // The object light field's box and (instance + 1 or 0, n_uv, n_st, 0 geometry / 1 radiance).
     field_min: vec4<f32>,
     field_max: vec4<f32>,
     field: vec4<u32>,
@@ -49,15 +51,16 @@ struct EnvInstance {
 
 @group(2) @binding(20) var env_maps: texture_2d_array<f32>;
 @group(2) @binding(21) var env_sampler: sampler;
-@group(2) @binding(22) var env_lut: texture_2d<f32>;
 @group(2) @binding(23) var<uniform> env_u: EnvUniforms;
 @group(2) @binding(24) var<storage, read> env_instances: array<EnvInstance>;
-// The planar mirrors' reflected views, pixel-aligned with the frame (raster/mirror.rs).
-@group(2) @binding(25) var env_mirrors: texture_2d_array<f32>;
+// One array of smaller images (one binding: GL's 16 sampled textures per stage): layer 0 the
+// split-sum table (32² in its corner), then the planar mirrors' reflected views, pixel-aligned
+// with the frame (raster/mirror.rs), then the object light field's six slabs from layer
+// env_u.field_layer, each an atlas of (u,v) tiles of
+// (s,t) texels in its layer's top-left corner, holding (exit direction, throughput) of a
+// geometry field (§10.2) or (radiance, coverage) of a radiance field (§10.1).
+@group(2) @binding(25) var env_extra: texture_2d_array<f32>;
 
-// The geometry light field (Heidrich 1999 §10.2, core/src/refraction_field.rs): one slab per
-// layer, an atlas of (u,v) tiles of (s,t) texels holding (exit direction, throughput).
-@group(2) @binding(26) var env_field: texture_2d_array<f32>;
 
 // Component i of v (no dynamic vector index on every backend).
 fn env_comp(v: vec3<f32>, i: u32) -> f32 {
@@ -84,7 +87,7 @@ fn env_field_lookup(o: vec3<f32>, d: vec3<f32>) -> vec4<f32> {
     let half_uv = vec2<f32>(env_comp(h, ua), env_comp(h, va)) + env_comp(h, a);
     let uv = vec2<f32>(env_comp(p, ua) - env_comp(c, ua), env_comp(p, va) - env_comp(c, va)) / half_uv;
     let st = vec2<f32>(env_comp(d, ua), env_comp(d, va)) / max(abs(da), 1e-6);
-    let layer = 2u * a + u32(da < 0.0);
+    let layer = env_u.field_layer + 2u * a + u32(da < 0.0);
     let n_uv = max(f32(env_u.field.y), 2.0);
     let n_st = max(f32(env_u.field.z), 1.0);
     let f = clamp((uv * 0.5 + 0.5) * n_uv - 0.5, vec2<f32>(0.0), vec2<f32>(n_uv - 1.0));
@@ -92,24 +95,38 @@ fn env_field_lookup(o: vec3<f32>, d: vec3<f32>) -> vec4<f32> {
     let w = f - i0;
     // (s,t) in texels within a tile, off its border so that bilinear reads stay inside.
     let sti = clamp((st * 0.5 + 0.5) * n_st, vec2<f32>(0.5), vec2<f32>(n_st - 0.5));
-    let side = n_uv * n_st;
+    let dims = vec2<f32>(textureDimensions(env_extra));
     var sum = vec4<f32>(0.0);
     for (var k = 0u; k < 4u; k++) {
         let o2 = vec2<f32>(f32(k & 1u), f32(k >> 1u));
         let wk = mix(1.0 - w.x, w.x, o2.x) * mix(1.0 - w.y, w.y, o2.y);
-        let at = ((i0 + o2) * n_st + sti) / side;
-        sum += textureSampleLevel(env_field, env_sampler, at, layer, 0.0) * wk;
+        let at = ((i0 + o2) * n_st + sti) / dims;
+        sum += textureSampleLevel(env_extra, env_sampler, at, layer, 0.0) * wk;
     }
     return sum;
+}
+
+// Whether `instance` takes its light besides the scene's punctual lights from a radiance
+// field (§10.1).
+fn env_radiance_field(instance: u32) -> bool {
+    return (env_u.field.x == instance + 1u) & (env_u.field.w == 1u);
+}
+
+// The split-sum table (32 × 32 over ⟨n,v⟩ and roughness, texel centres at the ends) in layer 0
+// of the extras, read bilinearly inside its corner.
+fn env_split_sum(nv: f32, roughness: f32) -> vec2<f32> {
+    let t = clamp(vec2<f32>(nv, roughness) * 32.0, vec2<f32>(0.5), vec2<f32>(31.5));
+    let at = t / vec2<f32>(textureDimensions(env_extra));
+    return textureSampleLevel(env_extra, env_sampler, at, 0u, 0.0).rg;
 }
 
 // A planar mirror's reflection (Heidrich 1999 ch. 10 intro): the scene drawn from the mirrored
 // eye, read at this fragment's own pixel, times the surface's Fresnel reflectance at the view
 // angle (the mirror limit of the GGX lobe, as the path tracer's).
 fn env_planar_mirror(s: Surface, nv: f32, pixel: vec2<f32>, layer: u32) -> vec3<f32> {
-    let size = vec2<i32>(textureDimensions(env_mirrors));
+    let size = vec2<i32>(textureDimensions(env_extra));
     let p = clamp(vec2<i32>(pixel), vec2<i32>(0), size - vec2<i32>(1));
-    let l = textureLoad(env_mirrors, p, i32(layer), 0).rgb;
+    let l = textureLoad(env_extra, p, i32(layer), 0).rgb;
     return l * surface_fresnel(s, clamp(nv, 0.0, 1.0));
 }
 
@@ -248,7 +265,7 @@ fn env_glass(s: Surface, v: vec3<f32>, nv: f32, r: vec3<f32>, dr: f32, base: u32
     // The object with a geometry light field: the baked exit direction and throughput of the
     // camera's ray (the view ray through this fragment), its map read unfiltered.
     let field = env_field_lookup(frame.camera_pos, safe_normalize(s.p - frame.camera_pos, -v));
-    let use_field = (env_u.field.x == instance + 1u) & !thin;
+    let use_field = (env_u.field.x == instance + 1u) & (env_u.field.w == 0u) & !thin;
     t = select(t, field.xyz, use_field);
     let through = select(1.0 - f, field.w, use_field);
     let reflected = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
@@ -346,7 +363,7 @@ fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32, base: u32) -> vec3<f32
     var out = vec3<f32>(0.0);
     if ggx {
         let l = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
-        let ab = textureSampleLevel(env_lut, env_sampler, vec2<f32>(nv, s.roughness), 0.0).rg;
+        let ab = env_split_sum(nv, s.roughness);
         // The table integrates Schlick's Fresnel: a measured metal scales by the exact
         // conductor's ratio to it at the view angle (exact for a mirror, where the lobe sees
         // only that angle). `select`, not a branch on the material's flag (lavapipe, above).

@@ -163,8 +163,11 @@ fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     // lookups stay out of a branch on per-fragment data, see env.wgsl on lavapipe).
     let mirror = env_instances[in.instance].dynamic.w;
     let spec = env_specular(s, v, r, dr, in.instance);
-    let planar = env_planar_mirror(s, dot(s.n, v), in.clip.xy, max(mirror, 1u) - 1u);
-    return source_radiance(s, in, nv) + select(spec, planar, mirror != 0u);
+    let planar = env_planar_mirror(s, dot(s.n, v), in.clip.xy, mirror);
+    let own = source_radiance(s, in, nv) + select(spec, planar, mirror != 0u);
+    // A radiance field's object: everything but the scene's punctual lights from the field.
+    let field = env_field_lookup(frame.camera_pos, -v);
+    return select(own, field.rgb, env_radiance_field(in.instance));
 }
 
 // The environment's unshadowed irradiance on the diffuse surface: from its SH coefficients
@@ -386,7 +389,10 @@ fn light_fs(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) v
     let li = lights[pass_u.light_index];
     let v = normalize(frame.camera_pos - s.p);
     let vis = shadow_map_visibility(li, s.p, s.ng);
-    return vec4<f32>(shade_light(s, li, v) * vis, 0.0);
+    // A radiance field holds a derived light's share (area lights, the environment's sun).
+    let derived = pass_u.light_index >= env_u.scene_lights;
+    let keep = select(1.0, 0.0, derived & env_radiance_field(in.instance));
+    return vec4<f32>(shade_light(s, li, v) * vis * keep, 0.0);
 }
 
 // ---- deferred path -----------------------------------------------------------------------------

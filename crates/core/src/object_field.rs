@@ -1,10 +1,13 @@
-//! Geometry light fields (Heidrich 1999 §10.2, after Cohen 1997): for every ray around a
-//! refracting object, where it leaves the object — the direction in which it looks up the
-//! environment — and how much of its light gets through. The field holds geometry only, so the
-//! environment can be swapped without baking again; the seed stores colour-coded environment
-//! texture coordinates and applies the map with pixel textures, here the field stores the exit
-//! direction itself and the shader renormalises the interpolated direction (the extraction's
-//! "modern twist").
+//! Two-plane light fields around one object (Heidrich 1999 ch. 10), of two kinds:
+//! - **geometry light fields** (§10.2, after Cohen 1997): for every ray around a refracting
+//!   object, where it leaves the object — the direction in which it looks up the environment —
+//!   and how much of its light gets through. Geometry only, so the environment can be swapped
+//!   without baking again; the seed stores colour-coded environment texture coordinates and
+//!   applies the map with pixel textures, here the field stores the exit direction itself and
+//!   the shader renormalises the interpolated direction (the extraction's "modern twist");
+//! - **radiance light fields** (§10.1): for every ray around a glossy object, the radiance it
+//!   leaves the object with — its indirect part, which tolerates the field's blur, while direct
+//!   light is shaded per frame (the seed's split).
 //!
 //! **Parameterisation.** Six two-plane slabs around the object's box, one per axis a and sign
 //! of the ray's a-component: a ray belongs to the slab of its dominant axis (ties to the lower
@@ -14,11 +17,12 @@
 //! at infinity, as a light slab with `Far::Infinity`). Samples are cell-centred; lookups are
 //! quadrilinear.
 //!
-//! **Values.** Per sample: the exit direction (unit) and the throughput (the product of the
-//! Fresnel transmittances 1 − F at the refractions, total internal reflections passing all),
-//! following the refracted branch at every interface: the path "with two refractions" for a
-//! convex object, more where the ray re-enters. A ray that misses the object keeps its
-//! direction with throughput 1.
+//! **Values** ([`FieldKind`]). Geometry: the exit direction (unit) and the throughput (the
+//! product of the Fresnel transmittances 1 − F at the refractions, total internal reflections
+//! passing all), following the refracted branch at every interface: the path "with two
+//! refractions" for a convex object, more where the ray re-enters; a ray that misses keeps its
+//! direction with throughput 1. Radiance: RGB and the coverage (1 where the ray meets the
+//! object, 0 where it misses, radiance 0).
 
 use crate::image::{Image, ImageError};
 use glam::{Vec2, Vec3, Vec4};
@@ -32,16 +36,44 @@ pub enum FieldError {
     Bad { path: PathBuf, problem: String },
 }
 
-/// A geometry light field around one object.
+/// What an [`ObjectField`] holds per ray.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldKind {
+    /// Exit direction and throughput (§10.2).
+    Geometry,
+    /// Outgoing radiance and coverage (§10.1).
+    Radiance,
+}
+
+impl FieldKind {
+    fn name(self) -> &'static str {
+        match self {
+            FieldKind::Geometry => "geometry",
+            FieldKind::Radiance => "radiance",
+        }
+    }
+
+    /// The folder's two images per slab: the vector part, then the scalar part.
+    fn files(self) -> [&'static str; 2] {
+        match self {
+            FieldKind::Geometry => ["direction", "throughput"],
+            FieldKind::Radiance => ["radiance", "coverage"],
+        }
+    }
+}
+
+/// A light field around one object.
 #[derive(Clone, Debug)]
-pub struct RefractionField {
+pub struct ObjectField {
+    pub kind: FieldKind,
     /// The object's box (world space).
     pub min: Vec3,
     pub max: Vec3,
     /// (u,v) samples per side and (s,t) samples per side of every slab.
     pub n_uv: usize,
     pub n_st: usize,
-    /// Per slab (2a + [d_a < 0]), per (iv, iu), per (it, is): exit direction, throughput.
+    /// Per slab (2a + [d_a < 0]), per (iv, iu), per (it, is): exit direction and throughput,
+    /// or radiance and coverage.
     pub data: Vec<Vec4>,
 }
 
@@ -58,10 +90,23 @@ pub fn slab_of(d: Vec3) -> (usize, usize, usize, usize) {
     (2 * a + (d[a] < 0.0) as usize, a, (a + 1) % 3, (a + 2) % 3)
 }
 
-impl RefractionField {
-    /// A field of the given box and resolution, every ray passing straight through.
-    pub fn straight(min: Vec3, max: Vec3, n_uv: usize, n_st: usize) -> RefractionField {
-        let mut f = RefractionField {
+impl ObjectField {
+    /// A radiance field of the given box and resolution, black.
+    pub fn black(min: Vec3, max: Vec3, n_uv: usize, n_st: usize) -> ObjectField {
+        ObjectField {
+            kind: FieldKind::Radiance,
+            min,
+            max,
+            n_uv,
+            n_st,
+            data: vec![Vec4::ZERO; 6 * n_uv * n_uv * n_st * n_st],
+        }
+    }
+
+    /// A geometry field of the given box and resolution, every ray passing straight through.
+    pub fn straight(min: Vec3, max: Vec3, n_uv: usize, n_st: usize) -> ObjectField {
+        let mut f = ObjectField {
+            kind: FieldKind::Geometry,
             min,
             max,
             n_uv,
@@ -128,8 +173,15 @@ impl RefractionField {
         (p, d.normalize())
     }
 
-    /// Quadrilinear lookup of ray (o, d): the exit direction (renormalised) and throughput.
+    /// Quadrilinear lookup of ray (o, d) in a geometry field: the exit direction
+    /// (renormalised) and throughput.
     pub fn lookup(&self, o: Vec3, d: Vec3) -> (Vec3, f32) {
+        let sum = self.lookup_raw(o, d);
+        (sum.truncate().normalize_or(d), sum.w)
+    }
+
+    /// Quadrilinear lookup of ray (o, d), as stored (radiance fields: radiance, coverage).
+    pub fn lookup_raw(&self, o: Vec3, d: Vec3) -> Vec4 {
         let (slab, c) = self.coords(o, d);
         let axis = |x: f32, n: usize| {
             let f = ((x * 0.5 + 0.5) * n as f32 - 0.5).clamp(0.0, (n - 1) as f32);
@@ -151,7 +203,7 @@ impl RefractionField {
                 }
             }
         }
-        (sum.truncate().normalize_or(d), sum.w)
+        sum
     }
 
     /// Bytes on the GPU (RGBA 16-bit float).
@@ -183,15 +235,17 @@ impl RefractionField {
             problem: e.to_string(),
         })?;
         let mut files = vec![];
+        let [vector, scalar] = self.kind.files();
         for slab in 0..6 {
-            for (channel, name) in [(0, "direction"), (1, "throughput")] {
+            for (channel, name) in [(0, vector), (1, scalar)] {
                 let p = dir.join(format!("slab-{slab}-{name}.exr"));
                 let bytes = self.atlas(slab, channel).encode(&p, Default::default())?;
                 files.push((p, bytes));
             }
         }
         let manifest = serde_json::json!({
-            "format": "lightlab refraction field 1",
+            "format": "lightlab object light field 1",
+            "kind": self.kind.name(),
             "min": self.min.to_array(),
             "max": self.max.to_array(),
             "n_uv": self.n_uv,
@@ -206,8 +260,8 @@ impl RefractionField {
         Ok(())
     }
 
-    /// Read a folder written by [`RefractionField::write`].
-    pub fn read(dir: &Path) -> Result<RefractionField, FieldError> {
+    /// Read a folder written by [`ObjectField::write`].
+    pub fn read(dir: &Path) -> Result<ObjectField, FieldError> {
         let path = dir.join("field.json");
         let bad = |problem: String| FieldError::Bad {
             path: path.clone(),
@@ -235,7 +289,14 @@ impl RefractionField {
         if min.cmpge(max).any() {
             return Err(bad("'min' must be below 'max' on every axis".into()));
         }
-        let mut f = RefractionField::straight(min, max, count("n_uv")?, count("n_st")?);
+        let kind = match m["kind"].as_str() {
+            Some("geometry") => FieldKind::Geometry,
+            Some("radiance") => FieldKind::Radiance,
+            _ => return Err(bad("'kind' must be \"geometry\" or \"radiance\"".into())),
+        };
+        let mut f = ObjectField::black(min, max, count("n_uv")?, count("n_st")?);
+        f.kind = kind;
+        let [vector, scalar] = kind.files();
         let side = (f.n_uv * f.n_st) as u32;
         for slab in 0..6 {
             let load = |name: &str| -> Result<Image, FieldError> {
@@ -249,7 +310,7 @@ impl RefractionField {
                 }
                 Ok(img)
             };
-            let (dirs, through) = (load("direction")?, load("throughput")?);
+            let (dirs, through) = (load(vector)?, load(scalar)?);
             for y in 0..side {
                 for x in 0..side {
                     let (xu, yu) = (x as usize, y as usize);
@@ -258,8 +319,8 @@ impl RefractionField {
                     let (d, w) = (dirs.get(x, y), through.get(x, y).x);
                     if !d.is_finite() || !w.is_finite() || !(0.0..=1.0001).contains(&w) {
                         return Err(bad(format!(
-                            "slab {slab}: sample ({iu}, {iv}, {is}, {it}) is not a direction \
-                             and a throughput in [0, 1]"
+                            "slab {slab}: sample ({iu}, {iv}, {is}, {it}) is not finite with \
+                             its {scalar} in [0, 1]"
                         )));
                     }
                     let i = f.index(slab, [iu, iv, is, it]);
@@ -275,8 +336,8 @@ impl RefractionField {
 mod tests {
     use super::*;
 
-    fn field() -> RefractionField {
-        RefractionField::straight(Vec3::new(-1.0, -0.5, -0.3), Vec3::new(0.6, 0.5, 0.9), 6, 5)
+    fn field() -> ObjectField {
+        ObjectField::straight(Vec3::new(-1.0, -0.5, -0.3), Vec3::new(0.6, 0.5, 0.9), 6, 5)
     }
 
     #[test]
@@ -337,7 +398,7 @@ mod tests {
         }
         let dir = tempfile::tempdir().unwrap();
         f.write(dir.path()).unwrap();
-        let g = RefractionField::read(dir.path()).unwrap();
+        let g = ObjectField::read(dir.path()).unwrap();
         assert_eq!(
             (g.n_uv, g.n_st, g.min, g.max),
             (f.n_uv, f.n_st, f.min, f.max)
@@ -346,7 +407,7 @@ mod tests {
             assert!(a.abs_diff_eq(*b, 2e-3), "{a} {b}");
         }
         std::fs::write(dir.path().join("field.json"), "{\"min\": [0, 0]}").unwrap();
-        let e = RefractionField::read(dir.path()).unwrap_err().to_string();
+        let e = ObjectField::read(dir.path()).unwrap_err().to_string();
         assert!(e.contains("'min'"), "{e}");
     }
 }
