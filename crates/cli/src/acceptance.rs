@@ -71,6 +71,12 @@ fn small_field(a: &mut TechniqueArgs) {
     a.bake.field.field_st = Some(8);
 }
 
+fn small_radiance_field(a: &mut TechniqueArgs) {
+    a.bake.field.field_uv = Some(8);
+    a.bake.field.field_st = Some(16);
+    a.bake.field.field_spp = 4;
+}
+
 fn lpv_indirect(a: &mut TechniqueArgs) {
     a.raster.ambient = Ambient::None;
     a.lpv.debug_view = DebugView::Indirect;
@@ -104,6 +110,7 @@ const ROWS: &[Row] = {
         Row { technique: T::PhongShadowMaps, scene: "shadows", reference: Direct, budget: 0.002, options: no_ambient },
         Row { technique: T::CannedLight, scene: "luminaire", reference: Direct, budget: 0.005, options: small_slab },
         Row { technique: T::LightfieldRefraction, scene: "glass", reference: Bounces(16), budget: 0.05, options: small_field },
+        Row { technique: T::LightfieldGlossy, scene: "spheres", reference: Bounces(16), budget: 0.06, options: small_radiance_field },
         Row { technique: T::Lightmap, scene: "cornell", reference: Bounces(16), budget: 0.015, options: small_lightmap },
         Row { technique: T::LightmapPhong, scene: "shadows", reference: Bounces(16), budget: 0.003, options: small_lightmap },
         Row { technique: T::PrtVertex, scene: "prt", reference: Bounces(1), budget: 0.6, options: small_sh },

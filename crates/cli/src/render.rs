@@ -25,13 +25,17 @@ pub struct RenderArgs {
     pub scene: String,
     /// `reference` (path-traced ground truth), `direct` (direct light only), or a GPU
     /// technique: `phong`, `phong-shadow-volumes`, `phong-shadow-maps`, `canned-light` (the
-    /// scene's luminaire as a light slab, `--light-field DIR` or baked first), `lightmap`
-    /// (baked light only) or `lightmap+phong` (baked indirect light plus dynamic lights and
-    /// shadow volumes); the SH techniques `prt-vertex`, `prt-textured`, `prt-hierarchical`,
-    /// `shl`, `shl-compressed`, `shl-normalmapped` (transfer × the scene's lights projected on
-    /// SH); the light
-    /// propagation volumes `lpv` and `lpv-faithful` (shadow-mapped direct light + one bounce
-    /// from the volume). The light-map and SH techniques read `--baked DIR` or bake first.
+    /// scene's luminaire as a light slab, `--light-field DIR` or baked first),
+    /// `lightfield-refraction` (glass through its geometry light field, `--refraction-field
+    /// DIR` or baked first), `lightfield-glossy` (a glossy object's indirect light from its
+    /// radiance light field, `--radiance-field DIR` or baked first), `lightmap` (baked light
+    /// only) or `lightmap+phong` (baked indirect light plus dynamic lights and shadow volumes);
+    /// the SH techniques `prt-vertex`, `prt-textured`, `prt-hierarchical`, `shl`,
+    /// `shl-compressed`, `shl-normalmapped` (transfer × the scene's lights projected on SH);
+    /// the light propagation volumes `lpv` and `lpv-faithful` (shadow-mapped direct light +
+    /// one bounce from the volume); the debug view `normals`. Every GPU technique draws planar
+    /// mirrors from the mirrored eye (`--planar-mirrors`). The light-map and SH techniques read
+    /// `--baked DIR` or bake first.
     /// The sky's diffuse light: traced (reference, direct); SH irradiance occluded through
     /// shadow-mapped sky directions (the Phong and LPV techniques, `--sky-occlusion`); baked
     /// (lightmap, lightmap+phong); in the SH transfer (prt-*, shl*).
