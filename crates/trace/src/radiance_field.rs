@@ -11,7 +11,6 @@ use glam::{Vec3, Vec4};
 use lightlab_core::object_field::ObjectField;
 use lightlab_core::sampling::Rng;
 use lightlab_scene::Scene;
-use rayon::prelude::*;
 
 /// Glossy instances a radiance field is for: opaque, metallic (≥ 0.5), roughness at least
 /// 0.05 (smoother ones are mirrors: environment maps or planar mirrors) — smoothest first,
@@ -67,35 +66,17 @@ pub fn bake(
     };
     let reach = 2.0 * (field.max - field.min).length();
     let eps = 1e-4 * (field.max - field.min).max_element();
-    let rows: Vec<(usize, usize)> = (0..6)
-        .flat_map(|slab| (0..n_uv).map(move |iv| (slab, iv)))
-        .collect();
-    let values: Vec<Vec<Vec4>> = rows
-        .par_iter()
-        .map(|&(slab, iv)| {
-            let mut row = Vec::with_capacity(n_uv * n_st * n_st);
-            for iu in 0..n_uv {
-                for it in 0..n_st {
-                    for is in 0..n_st {
-                        let (p, d) = field.ray(slab, [iu, iv, is, it]);
-                        let o = p - d * reach;
-                        let Some(hit) = object_accel.intersect(o, d, f32::INFINITY) else {
-                            row.push(Vec4::ZERO);
-                            continue;
-                        };
-                        let start = o + d * (hit.t - eps);
-                        let item = field.index(slab, [iu, iv, is, it]) as u64;
-                        let mut rng = Rng::new(seed, item);
-                        let sum: Vec3 = (0..spp)
-                            .map(|_| pt.radiance(start, d, &settings, &mut rng))
-                            .sum();
-                        row.push((sum / spp.max(1) as f32).extend(1.0));
-                    }
-                }
-            }
-            row
-        })
-        .collect();
-    field.data = values.into_iter().flatten().collect();
+    crate::refraction_field::fill(&mut field, |item, p, d| {
+        let o = p - d * reach;
+        let Some(hit) = object_accel.intersect(o, d, f32::INFINITY) else {
+            return Vec4::ZERO;
+        };
+        let start = o + d * (hit.t - eps);
+        let mut rng = Rng::new(seed, item as u64);
+        let sum: Vec3 = (0..spp)
+            .map(|_| pt.radiance(start, d, &settings, &mut rng))
+            .sum();
+        (sum / spp.max(1) as f32).extend(1.0)
+    });
     Some(field)
 }

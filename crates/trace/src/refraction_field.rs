@@ -66,6 +66,35 @@ fn exit(scene: &Scene, accel: &Accel, ior: f32, o: Vec3, d: Vec3, eps: f32) -> V
     d.extend(0.0)
 }
 
+/// Set every sample of `field` to `value(index, point, direction)` of its ray (a point on the
+/// central plane, the unit direction), in parallel over (slab, iv) rows; `index` is the
+/// sample's index in `field.data`, for per-sample random streams.
+pub(crate) fn fill(field: &mut ObjectField, value: impl Fn(usize, Vec3, Vec3) -> Vec4 + Sync) {
+    let (n_uv, n_st) = (field.n_uv, field.n_st);
+    let rows: Vec<(usize, usize)> = (0..6)
+        .flat_map(|slab| (0..n_uv).map(move |iv| (slab, iv)))
+        .collect();
+    let f = &*field;
+    let values: Vec<Vec<Vec4>> = rows
+        .par_iter()
+        .map(|&(slab, iv)| {
+            let mut row = Vec::with_capacity(n_uv * n_st * n_st);
+            for iu in 0..n_uv {
+                for it in 0..n_st {
+                    for is in 0..n_st {
+                        let k = [iu, iv, is, it];
+                        let (p, d) = f.ray(slab, k);
+                        row.push(value(f.index(slab, k), p, d));
+                    }
+                }
+            }
+            row
+        })
+        .collect();
+    // Rows in (slab, iv) order, each (iu, it, is): the field's own layout.
+    field.data = values.into_iter().flatten().collect();
+}
+
 /// The geometry light field of instance `instance` of `scene`: `n_uv`² × `n_st`² samples per
 /// slab, traced through that instance alone with its material's index. None when the instance
 /// has no geometry.
@@ -77,29 +106,14 @@ pub fn bake(scene: &Scene, instance: usize, n_uv: usize, n_st: usize) -> Option<
     let ior = scene.materials[scene.meshes[scene.instances[instance].mesh].material].ior;
     let (lo, hi) = scene.instance_bounds(instance)?;
     let pad = (hi - lo).max_element() * 1e-3;
-    let mut field = ObjectField::straight(lo - pad, hi + pad, n_uv, n_st);
+    // Every sample is traced below: start from a black field, not a straight one.
+    let mut field = ObjectField::black(lo - pad, hi + pad, n_uv, n_st);
+    field.kind = lightlab_core::object_field::FieldKind::Geometry;
     let reach = 2.0 * (field.max - field.min).length();
     let eps = 1e-4 * (field.max - field.min).max_element();
-    let rows: Vec<(usize, usize)> = (0..6)
-        .flat_map(|slab| (0..n_uv).map(move |iv| (slab, iv)))
-        .collect();
-    let values: Vec<Vec<Vec4>> = rows
-        .par_iter()
-        .map(|&(slab, iv)| {
-            let mut row = Vec::with_capacity(n_uv * n_st * n_st);
-            for iu in 0..n_uv {
-                for it in 0..n_st {
-                    for is in 0..n_st {
-                        let (p, d) = field.ray(slab, [iu, iv, is, it]);
-                        row.push(exit(&object, &accel, ior, p - d * reach, d, eps));
-                    }
-                }
-            }
-            row
-        })
-        .collect();
-    // Rows in (slab, iv) order, each (iu, it, is): the field's own layout.
-    field.data = values.into_iter().flatten().collect();
+    fill(&mut field, |_, p, d| {
+        exit(&object, &accel, ior, p - d * reach, d, eps)
+    });
     Some(field)
 }
 
