@@ -306,6 +306,7 @@ mod tests {
             cameras: vec![],
             warnings: vec![],
             animation: None,
+            luminaire_focus: Default::default(),
         }
     }
 

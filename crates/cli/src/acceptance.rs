@@ -164,7 +164,7 @@ fn normals(scene: &Scene, accel: &Accel) -> Image {
 /// The path tracer's image of `scene` for a kind of reference.
 fn reference(scene: &Scene, kind: Reference) -> Image {
     // Luminaires traced through their windows, as `render` traces them.
-    let (scene, windows) = crate::render::windowed(scene, None);
+    let (scene, windows) = crate::render::windowed(scene, &[]);
     let scene = &*scene;
     let accel = Accel::new(scene);
     let (min_depth, max_depth, spp) = match kind {

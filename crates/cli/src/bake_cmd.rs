@@ -170,16 +170,21 @@ fn bake_object_field(
 fn bake_light_field(scene: &Scene, out: &Path, args: &BakeArgs, json: bool) -> Result<()> {
     let s = &args.slab;
     let t = std::time::Instant::now();
-    let (name, slab) = crate::techniques::canned::bake(scene, s, args.bake_seed)?;
+    let name = crate::techniques::canned::chosen(scene, s, false)?.remove(0);
+    let slab = crate::techniques::canned::bake(scene, &name, s, args.bake_seed)?;
     let seconds = t.elapsed().as_secs_f64();
+    let far = match slab.far {
+        lightlab_core::light_slab::Far::Plane(d) => serde_json::json!(d),
+        lightlab_core::light_slab::Far::Infinity => serde_json::json!("inf"),
+    };
     let stats = serde_json::json!({
         "method": "light-field",
         "scene": scene.name,
         "luminaire": name,
         "n_uv": slab.n_uv,
         "n_st": slab.n_st,
-        "far": s.slab_far,
-        "far_half": s.slab_far_half,
+        "far": far,
+        "far_half": slab.far_half.to_array(),
         "samples": s.slab_samples,
         "gpu_bytes": slab.gpu_bytes(),
         "seconds": seconds,

@@ -75,10 +75,10 @@ fn gpu(
         height: 2 * a.height,
         shadows: ShadowMethod::Map,
         ambient: Ambient::None,
-        light_field: Some(CannedLight {
+        light_field: vec![CannedLight {
             slab: slab.clone(),
             passes,
-        }),
+        }],
         ..Default::default()
     };
     best_of_three(ctx, &mut Renderer::new(ctx, room, settings)?)
@@ -107,10 +107,7 @@ pub fn run(
     let mut scene = load_scene(scene.0, scene.1)?;
     scene.lights.clear();
     scene.environment = None;
-    let name = luminaire::names(&scene)
-        .first()
-        .cloned()
-        .with_context(|| format!("{} has no luminaire", scene.name))?;
+    let name = crate::techniques::canned::chosen(&scene, slab, false)?.remove(0);
     let lamp = Arc::new(
         LampEmitter::new(&scene, &name, crate::techniques::canned::LAMP_DEPTH)
             .context("the luminaire has no geometry")?,
@@ -137,7 +134,7 @@ pub fn run(
             s.slab_uv = grid(uv)?;
             s.slab_st = grid(st)?;
             let t = Instant::now();
-            let (_, baked) = crate::techniques::canned::bake(&scene, &s, 0)?;
+            let baked = crate::techniques::canned::bake(&scene, &name, &s, 0)?;
             let bake_s = t.elapsed().as_secs_f64();
             let baked = Arc::new(baked);
             let (img, per_point_ms) = gpu(&ctx, &room, &baked, CannedPasses::PerPoint, a)?;

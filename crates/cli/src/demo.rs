@@ -92,7 +92,7 @@ pub fn run(out: &Path, quality: Quality, only: &[String]) -> Result<()> {
                 settings.spp = (settings.spp / 2).max(8);
             }
             let t = Instant::now();
-            let img = render_reference(&scene, technique, &settings, None)?;
+            let img = render_reference(&scene, technique, &settings, &[])?;
             let seconds = t.elapsed().as_secs_f64();
             let file = format!("{name}-{technique}");
             let error = save_and_compare(out, &file, &img, reference.as_ref())?;

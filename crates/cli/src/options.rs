@@ -165,12 +165,13 @@ pub struct TechniqueArgs {
     pub lpv: LpvArgs,
     #[command(flatten)]
     pub lens: LensArgs,
-    /// A canned light (a light slab folder, `bake --method light-field`) to light the scene
-    /// with in place of its luminaire's geometry: the GPU techniques draw it as projective-
-    /// texture spot lights (Heidrich §7.2.2), `reference` and `direct` as the slab's micro
-    /// lights (§7.2.1). `canned-light` without it bakes the scene's first luminaire first.
+    /// A canned light (a light slab folder, `bake --method light-field`; repeat for several)
+    /// to light the scene with in place of the geometry of the luminaire it was baked from:
+    /// the GPU techniques draw it as projective-texture spot lights (Heidrich §7.2.2),
+    /// `reference` and `direct` as the slab's micro lights (§7.2.1). `canned-light` without
+    /// it bakes the scene's luminaires first (`--luminaire NAME`: that one).
     #[arg(long, value_name = "DIR")]
-    pub light_field: Option<PathBuf>,
+    pub light_field: Vec<PathBuf>,
     /// How the GPU draws a canned light: `per-point` (one additive pass per (u,v) grid point,
     /// as the seed) or `array` (one pass summing every grid point from a texture array).
     #[arg(long, default_value = "per-point")]
@@ -760,13 +761,15 @@ pub struct SlabArgs {
     /// Samples over the (s,t) window, `NxM`.
     #[arg(long, default_value = "64x64", value_parser = parse_grid)]
     pub slab_st: [usize; 2],
-    /// Where the (s,t) window lies: `inf` (directions; its half-size in slopes) or a distance
-    /// in metres along the lamp's axis (a plane; its half-size in metres).
-    #[arg(long, default_value = "inf")]
+    /// Where the (s,t) window lies: `auto` (the luminaire's focus, glTF
+    /// `extras.lightlab.luminaireFocus`, else infinity), `inf` (directions; its half-size in
+    /// slopes) or a distance in metres along the lamp's axis (a plane; its half-size in metres).
+    #[arg(long, default_value = "auto")]
     pub slab_far: String,
     /// Half the (s,t) window: slopes at infinity (3 ≈ 71.6° off the axis), metres on a plane.
-    #[arg(long, default_value_t = 3.0)]
-    pub slab_far_half: f32,
+    /// Default: fitted to the lamp's beam by a probe of its light.
+    #[arg(long)]
+    pub slab_far_half: Option<f32>,
     /// Paths per (s,t) sample, jittered over its cell.
     #[arg(long, default_value_t = 16)]
     pub slab_samples: u32,
@@ -778,24 +781,29 @@ impl Default for SlabArgs {
             luminaire: None,
             slab_uv: [8, 8],
             slab_st: [64, 64],
-            slab_far: "inf".into(),
-            slab_far_half: 3.0,
+            slab_far: "auto".into(),
+            slab_far_half: None,
             slab_samples: 16,
         }
     }
 }
 
 impl SlabArgs {
-    /// The far window's placement.
-    pub fn far(&self) -> anyhow::Result<lightlab_core::light_slab::Far> {
+    /// The far window's placement; `auto` is `default`.
+    pub fn far(
+        &self,
+        default: lightlab_core::light_slab::Far,
+    ) -> anyhow::Result<lightlab_core::light_slab::Far> {
         use lightlab_core::light_slab::Far;
-        if self.slab_far == "inf" {
-            return Ok(Far::Infinity);
+        match self.slab_far.as_str() {
+            "auto" => return Ok(default),
+            "inf" => return Ok(Far::Infinity),
+            _ => {}
         }
         match self.slab_far.parse::<f32>() {
             Ok(d) if d.is_finite() && d > 0.0 => Ok(Far::Plane(d)),
             _ => anyhow::bail!(
-                "--slab-far '{}' must be `inf` or a positive distance in metres",
+                "--slab-far '{}' must be `auto`, `inf` or a positive distance in metres",
                 self.slab_far
             ),
         }

@@ -92,25 +92,27 @@ fn path_settings(technique: Technique, settings: &RenderSettings) -> RenderSetti
     s
 }
 
-/// The scene the path tracer renders and its window lights: each luminaire's geometry traced
-/// through its window (the paths inside a lamp that room paths would almost never find), or
-/// replaced by the canned light `light_field` (the slab's micro lights, Heidrich §7.2.1).
+/// The scene the path tracer renders and its window lights: the canned lights `slabs` (each
+/// slab's micro lights, Heidrich §7.2.1) in place of the luminaires they replace, and every
+/// other luminaire's geometry traced through its window (the paths inside a lamp that room
+/// paths would almost never find).
 pub fn windowed<'a>(
     scene: &'a Scene,
-    light_field: Option<&Arc<LightSlab>>,
+    slabs: &[Arc<LightSlab>],
 ) -> (Cow<'a, Scene>, Vec<Arc<dyn WindowEmitter>>) {
+    use crate::techniques::canned;
     use lightlab_trace::luminaire;
-    match light_field {
-        Some(slab) => (
-            Cow::Owned(luminaire::without_luminaires(scene)),
-            vec![Arc::new(SlabEmitter::new(slab.clone()))],
-        ),
-        None if luminaire::names(scene).is_empty() => (Cow::Borrowed(scene), vec![]),
-        None => {
-            let (room, lamps) = luminaire::prepare(scene, crate::techniques::canned::LAMP_DEPTH);
-            (Cow::Owned(room), lamps)
-        }
+    if slabs.is_empty() && luminaire::names(scene).is_empty() {
+        return (Cow::Borrowed(scene), vec![]);
     }
+    let room = canned::room(scene, slabs);
+    let (room, mut lights) = luminaire::prepare(&room, canned::LAMP_DEPTH);
+    lights.extend(
+        slabs
+            .iter()
+            .map(|s| Arc::new(SlabEmitter::new(s.clone())) as Arc<dyn WindowEmitter>),
+    );
+    (Cow::Owned(room), lights)
 }
 
 /// Render with the reference path tracer (technique `reference` or `direct`), with a progress
@@ -119,7 +121,7 @@ pub fn render_reference(
     scene: &Scene,
     technique: Technique,
     settings: &RenderSettings,
-    light_field: Option<&Arc<LightSlab>>,
+    light_field: &[Arc<LightSlab>],
 ) -> Result<Image> {
     let s = path_settings(technique, settings);
     let (scene, windows) = windowed(scene, light_field);
@@ -199,8 +201,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
         return render_shard(&a, &scene, &settings, shard);
     }
     let t0 = Instant::now();
-    let slab = canned_slab(&a)?;
-    let img = render_reference(&scene, a.technique, &settings, slab.as_ref())?;
+    let slabs = canned_slabs(&a)?;
+    let img = render_reference(&scene, a.technique, &settings, &slabs)?;
     let secs = t0.elapsed().as_secs_f64();
     write_output(&a, &img)?;
     let paths = settings.width as f64 * settings.height as f64 * settings.spp as f64;
@@ -248,17 +250,17 @@ fn depth_range(a: &RenderArgs) -> Result<(u32, u32)> {
     }
 }
 
-/// The light slab of `--light-field`, for the path tracer.
-fn canned_slab(a: &RenderArgs) -> Result<Option<Arc<LightSlab>>> {
+/// The light slabs of `--light-field`, for the path tracer.
+fn canned_slabs(a: &RenderArgs) -> Result<Vec<Arc<LightSlab>>> {
     a.gpu
         .light_field
-        .as_ref()
+        .iter()
         .map(|dir| {
             LightSlab::read(dir)
                 .map(Arc::new)
                 .with_context(|| format!("reading the light slab in {}", dir.display()))
         })
-        .transpose()
+        .collect()
 }
 
 /// `render --shard I/N`: the shard's rows into a part folder.
@@ -284,8 +286,8 @@ fn render_shard(
         tonemap: a.tonemap.name().into(),
         camera_model: settings.lens.describe(),
     };
-    let slab = canned_slab(a)?;
-    let (traced, windows) = windowed(scene, slab.as_ref());
+    let slabs = canned_slabs(a)?;
+    let (traced, windows) = windowed(scene, &slabs);
     let accel = Accel::new(&traced);
     let mut pt = PathTracer::new(&traced, &accel);
     pt.windows = windows;

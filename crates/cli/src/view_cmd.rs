@@ -54,7 +54,7 @@ pub fn view(a: &ViewArgs) -> Result<()> {
     apply_brdf(&mut scene, a.gpu.raster.brdf);
     // `canned-light` needs a luminaire to bake, or a slab.
     let canned =
-        a.gpu.light_field.is_some() || !lightlab_trace::luminaire::names(&scene).is_empty();
+        !a.gpu.light_field.is_empty() || !lightlab_trace::luminaire::names(&scene).is_empty();
     // `lightfield-refraction` needs solid glass to bake, or a field.
     let glass = a.gpu.refraction_field.is_some()
         || !lightlab_trace::refraction_field::glass_instances(&scene).is_empty();

@@ -51,6 +51,9 @@ pub struct LightSlab {
     pub n_st: [usize; 2],
     /// Radiance, `[((iu · N_v + iv) · N_s + is) · N_t + it]`.
     pub radiance: Vec<Vec3>,
+    /// The luminaire this slab was baked from (glTF `extras.lightlab.luminaire`): the one it
+    /// replaces when it lights a scene. None: it replaces every luminaire.
+    pub luminaire: Option<String>,
 }
 
 /// Why a slab was refused.
@@ -85,6 +88,7 @@ impl LightSlab {
             far_half,
             n_st,
             radiance: vec![Vec3::ZERO; n_uv[0] * n_uv[1] * n_st[0] * n_st[1]],
+            luminaire: None,
         }
     }
 
@@ -279,6 +283,7 @@ impl LightSlab {
             "far": far,
             "far_half": self.far_half.to_array(),
             "n_st": self.n_st,
+            "luminaire": self.luminaire,
             "slices": "slice-IU-IV.exr: width N_s, height N_t",
         });
         let text = serde_json::to_vec_pretty(&manifest).expect("serialisable");
@@ -337,6 +342,14 @@ impl LightSlab {
             v2("far_half")?,
             counts("n_st")?,
         );
+        slab.luminaire = match &m["luminaire"] {
+            serde_json::Value::Null => None,
+            v => Some(
+                v.as_str()
+                    .ok_or_else(|| bad("'luminaire' must be a name or null".into()))?
+                    .to_string(),
+            ),
+        };
         for iu in 0..slab.n_uv[0] {
             for iv in 0..slab.n_uv[1] {
                 let p = dir.join(Self::slice_name(iu, iv));
@@ -619,10 +632,12 @@ mod tests {
 
     #[test]
     fn a_folder_round_trips() {
-        let s = slab(Far::Plane(1.5));
+        let mut s = slab(Far::Plane(1.5));
+        s.luminaire = Some("projector".into());
         let dir = tempfile::tempdir().unwrap();
         s.write(dir.path()).unwrap();
         let back = LightSlab::read(dir.path()).unwrap();
+        assert_eq!(back.luminaire.as_deref(), Some("projector"));
         assert_eq!(back.n_uv, s.n_uv);
         assert_eq!(back.far, s.far);
         for (a, b) in s.radiance.iter().zip(&back.radiance) {

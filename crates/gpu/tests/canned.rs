@@ -28,10 +28,10 @@ fn gpu(
         height: h,
         shadows: ShadowMethod::Map,
         ambient: Ambient::None,
-        light_field: Some(CannedLight {
+        light_field: vec![CannedLight {
             slab: slab.clone(),
             passes,
-        }),
+        }],
         ..Default::default()
     };
     let mut r = Renderer::new(&ctx, room, settings).unwrap();
@@ -95,4 +95,110 @@ fn the_canned_reflector_lamp_matches_its_real_geometry() {
     }
     assert!(same < 1e-6, "{same}");
     assert!(e <= 0.02, "{e}");
+}
+
+/// Heidrich's Fig 7.3: the slide projector of `luminaire` focused on its screen, its slab's
+/// (s,t) plane on the screen (the scene's focus) and fitted to the beam; then both canned
+/// lamps of the scene drawn together (their slices share one texture array).
+#[test]
+fn the_canned_projector_focuses_its_slide_and_shares_the_array_with_the_reflector() {
+    if test_context().is_none() {
+        return;
+    }
+    let mut scene = builtin::builtin("luminaire").unwrap();
+    scene.lights.clear();
+    let lamp = |name: &str| Arc::new(LampEmitter::new(&scene, name, 16).unwrap());
+    let (projector, reflector) = (lamp("projector"), lamp("reflector"));
+    let far = luminaire::default_far(&scene, "projector", &projector.window);
+    let Far::Plane(d) = far else {
+        panic!("the projector's slab ends on its screen: {far:?}")
+    };
+    assert!((d - 3.38).abs() < 0.02, "{d}");
+    let half = luminaire::fit_far_half(&projector, far, 1).unwrap();
+    // The picture is 36 × 24 mm magnified ~26×: about 0.94 × 0.63 m on the screen.
+    assert!(
+        (0.45..0.56).contains(&half.x) && (0.31..0.42).contains(&half.y),
+        "{half}"
+    );
+    let slab = |lamp: &LampEmitter, far, half| {
+        Arc::new(luminaire::bake_slab(
+            lamp,
+            [8, 8],
+            far,
+            half,
+            [64, 64],
+            4,
+            1,
+        ))
+    };
+    let p_slab = slab(&projector, far, half);
+    let r_slab = slab(&reflector, Far::Infinity, Vec2::splat(3.0));
+    let room = luminaire::without_luminaires(&scene);
+    let (w, h) = (64, 48);
+    let accel = Accel::new(&room);
+    let traced = |lights: Vec<Arc<dyn lightlab_trace::WindowEmitter>>, camera| {
+        let mut pt = PathTracer::new(&room, &accel);
+        pt.windows = lights;
+        let s = RenderSettings {
+            width: w,
+            height: h,
+            spp: 512,
+            max_depth: 1,
+            camera,
+            ..Default::default()
+        };
+        pt.render(&s, &|_, _| true).unwrap()
+    };
+    let canned = |slabs: &[&Arc<LightSlab>], camera| {
+        let ctx = test_context().unwrap();
+        let settings = RasterSettings {
+            width: 2 * w,
+            height: 2 * h,
+            camera,
+            shadows: ShadowMethod::Map,
+            ambient: Ambient::None,
+            light_field: slabs
+                .iter()
+                .map(|s| CannedLight {
+                    slab: (*s).clone(),
+                    passes: CannedPasses::Array,
+                })
+                .collect(),
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&ctx, &room, settings).unwrap();
+        r.render(&ctx);
+        r.read_hdr(&ctx).unwrap().downsample(2)
+    };
+    // The screen, seen from in front of the projector (camera 1).
+    let real = traced(vec![projector.clone()], 1);
+    let gpu = canned(&[&p_slab], 1);
+    let e = relmse(&gpu, &real).unwrap();
+    let emitter = traced(vec![Arc::new(SlabEmitter::new(p_slab.clone()))], 1);
+    let e_pt = relmse(&emitter, &real).unwrap();
+    println!(
+        "projector {:.0}×{:.0} cm at {d:.2} m: canned light on the GPU {e:.5}, the slab as emitter {e_pt:.5}",
+        200.0 * half.x,
+        200.0 * half.y
+    );
+    // Both lamps at once, the room's camera.
+    let real2 = traced(vec![projector, reflector], 0);
+    let gpu2 = canned(&[&r_slab, &p_slab], 0);
+    let e2 = relmse(&gpu2, &real2).unwrap();
+    println!("projector and reflector together on the GPU: relMSE {e2:.5}");
+    if let Ok(dir) = std::env::var("LIGHTLAB_DUMP") {
+        let p = std::path::Path::new(&dir);
+        for (name, img) in [
+            ("projector_real", &real),
+            ("projector_gpu", &gpu),
+            ("both_real", &real2),
+            ("both_gpu", &gpu2),
+        ] {
+            img.write(&p.join(format!("{name}.exr")), Default::default())
+                .unwrap();
+        }
+    }
+    assert!(e <= 0.02, "{e}");
+    assert!(e_pt <= 0.01, "{e_pt}");
+    assert!(e2 <= 0.02, "{e2}");
 }

@@ -84,6 +84,7 @@ fn ridged_floor(tilt: f32) -> Scene {
         environment: None,
         warnings: vec![],
         animation: None,
+        luminaire_focus: Default::default(),
     }
 }
 

@@ -1057,9 +1057,14 @@ impl Importer<'_> {
                     problem: format!("lies deeper than {MAX_NODE_DEPTH} levels of nodes"),
                 });
             }
-            self.luminaire = extras_json(node.extras())
-                .and_then(|e| Some(e.get("lightlab")?.get("luminaire")?.as_str()?.to_string()))
+            let extras = extras_json(node.extras());
+            let lightlab = extras.as_ref().and_then(|e| e.get("lightlab"));
+            self.luminaire = lightlab
+                .and_then(|l| Some(l.get("luminaire")?.as_str()?.to_string()))
                 .or(luminaire);
+            if let Some(f) = lightlab.and_then(|l| l.get("luminaireFocus")) {
+                self.luminaire_focus(f, what())?;
+            }
             let world = self.node(&node, parent, &above, default_material)?;
             let children: Vec<_> = node.children().collect();
             let mut path = above;
@@ -1074,6 +1079,30 @@ impl Importer<'_> {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// A node's `extras.lightlab.luminaireFocus`, for the luminaire it belongs to (the first
+    /// node's value wins).
+    fn luminaire_focus(&mut self, f: &Value, what: String) -> Result<(), SceneError> {
+        let bad = |problem: &str| SceneError::Content {
+            path: self.path.into(),
+            what: what.clone(),
+            problem: problem.into(),
+        };
+        let Some(name) = self.luminaire.clone() else {
+            return Err(bad(
+                "has extras.lightlab.luminaireFocus but belongs to no luminaire (set \
+                 extras.lightlab.luminaire on it or a node above it)",
+            ));
+        };
+        let d = f
+            .as_f64()
+            .filter(|d| d.is_finite() && *d > 0.0)
+            .ok_or_else(|| {
+                bad("extras.lightlab.luminaireFocus must be a positive distance in metres")
+            })?;
+        self.scene.luminaire_focus.entry(name).or_insert(d as f32);
         Ok(())
     }
 
@@ -1701,6 +1730,9 @@ impl Writer {
                     node["extras"]["lightlab"] = json!({});
                 }
                 node["extras"]["lightlab"]["luminaire"] = json!(l);
+                if let Some(f) = scene.luminaire_focus.get(l) {
+                    node["extras"]["lightlab"]["luminaireFocus"] = json!(f);
+                }
             }
             nodes.push(node);
         }

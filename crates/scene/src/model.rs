@@ -25,6 +25,11 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// Rigid motion of some instances over time (`--frame K` poses it); None for still scenes.
     pub animation: Option<crate::Animation>,
+    /// Where a luminaire is focused (glTF `extras.lightlab.luminaireFocus` on a node of the
+    /// luminaire): metres along its axis from its first instance's origin. A slide projector's
+    /// screen; its light slab's (s,t) plane lies there (Heidrich Fig 7.3). Luminaires without
+    /// an entry get (s,t) at infinity.
+    pub luminaire_focus: std::collections::BTreeMap<String, f32>,
 }
 
 /// An indexed triangle mesh with one material (a glTF primitive).

@@ -424,6 +424,22 @@ fn goniometric_lights_survive_an_export_round_trip() {
     };
     assert_eq!(marked(&back), marked(&scene));
     assert_eq!(marked(&scene), 3);
+    // The projector's focus (its slab's (s,t) plane) survives too.
+    let focus = scene.luminaire_focus["projector"];
+    assert!((back.luminaire_focus["projector"] - focus).abs() < 1e-6);
+    // A focus that is no distance is refused, naming the node.
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for node in doc["nodes"].as_array_mut().unwrap() {
+        if node["extras"]["lightlab"]["luminaireFocus"].is_number() {
+            node["extras"]["lightlab"]["luminaireFocus"] = serde_json::json!(-1.0);
+        }
+    }
+    std::fs::write(&out, serde_json::to_string(&doc).unwrap()).unwrap();
+    let e = gltf_io::import(&out, Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("luminaireFocus") && e.contains("node"), "{e}");
     for (a, b) in scene.lights.iter().zip(&back.lights) {
         for d in directions() {
             let (x, y) = (a.emission(d), b.emission(d));

@@ -90,7 +90,7 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
         }
         _ => *req,
     };
-    if req.args.light_field.is_some() && req.technique.family() != Family::Phong {
+    if !req.args.light_field.is_empty() && req.technique.family() != Family::Phong {
         bail!(
             "--light-field lights the Phong techniques (phong, phong-shadow-volumes, \
              phong-shadow-maps, canned-light), reference and direct; not '{}'",
@@ -115,17 +115,20 @@ pub fn build(ctx: &GpuContext, req: &Request, bakes: &mut Bakes) -> Result<Techn
             let shadows = req.technique.shadows(a.shadow_variant)?;
             let mut s = a.settings(shadows, req.width, req.height, req.camera)?;
             s.object_field = refraction::field(req.scene, req.technique, req.args)?;
-            match canned::light(req.scene, req.technique, req.args)? {
-                Some(slab) => {
-                    // The slab replaces the luminaire's geometry (and its light).
-                    s.light_field = Some(lightlab_gpu::raster::CannedLight {
+            let slabs = canned::lights(req.scene, req.technique, req.args)?;
+            if slabs.is_empty() {
+                Renderer::new(ctx, req.scene, s)?
+            } else {
+                // The slabs replace their luminaires' geometry (and light).
+                let room = canned::room(req.scene, &slabs);
+                s.light_field = slabs
+                    .into_iter()
+                    .map(|slab| lightlab_gpu::raster::CannedLight {
                         slab,
                         passes: req.args.light_field_passes,
-                    });
-                    let room = lightlab_trace::luminaire::without_luminaires(req.scene);
-                    Renderer::new(ctx, &room, s)?
-                }
-                None => Renderer::new(ctx, req.scene, s)?,
+                    })
+                    .collect();
+                Renderer::new(ctx, &room, s)?
             }
         }
         Family::Lightmap => {

@@ -67,7 +67,7 @@ impl FrameBuffers {
         ctx: &crate::GpuContext,
         frame: &FrameUniforms,
         ls: &LightSet,
-        canned: Option<&super::CannedLight>,
+        canned: &[super::CannedLight],
     ) -> FrameBuffers {
         let device = &ctx.device;
         let init = |label, contents: &[u8], usage| {
@@ -106,7 +106,7 @@ impl FrameBuffers {
             put(n + v, li, v);
         }
         let storage = wgpu::BufferUsages::STORAGE;
-        let (slab, slab_sampler) = crate::canned::slab_texture(ctx, canned.map(|c| &*c.slab));
+        let (slab, slab_sampler) = crate::canned::slab_texture(ctx, canned);
         FrameBuffers {
             frame: init(
                 "frame",
@@ -440,7 +440,7 @@ impl Renderer {
             ls.light_pos.len(),
             sun.as_ref().map(|(_, e)| e),
         );
-        let buffers = FrameBuffers::new(ctx, &frame, &ls, settings.light_field.as_ref());
+        let buffers = FrameBuffers::new(ctx, &frame, &ls, &settings.light_field);
         let kind = source.kind();
         let layouts = GroupLayouts::new(device, &kind.layout_entries());
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {

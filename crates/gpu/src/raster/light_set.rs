@@ -146,8 +146,9 @@ impl LightSet {
             set.light_pos.push(lp);
             set.light_radius.push(radius);
         }
-        if let Some(c) = &s.light_field {
-            set.add_canned(c, s, bounds);
+        let (firsts, _) = crate::canned::first_layers(&s.light_field);
+        for (c, first) in s.light_field.iter().zip(firsts) {
+            set.add_canned(c, first, s, bounds);
         }
         if set.lights.is_empty() {
             set.lights.push(GpuLight::default());
@@ -155,9 +156,15 @@ impl LightSet {
         set
     }
 
-    /// A canned light's records (`canned.rs`), sharing one cube of shadow views at its
-    /// window's centre.
-    fn add_canned(&mut self, c: &super::CannedLight, s: &RasterSettings, bounds: (Vec3, Vec3)) {
+    /// A canned light's records (`canned.rs`; its slices from layer `first`), sharing one
+    /// cube of shadow views at its window's centre.
+    fn add_canned(
+        &mut self,
+        c: &super::CannedLight,
+        first: u32,
+        s: &RasterSettings,
+        bounds: (Vec3, Vec3),
+    ) {
         let slab = &*c.slab;
         // The cube sits a little in front of the window, so that nothing at the window casts
         // a shadow over the whole slab.
@@ -171,7 +178,7 @@ impl LightSet {
             direction: slab.normal(),
             range: None,
         };
-        let first = self.views.len() as u32;
+        let first_view = self.views.len() as u32;
         let li = self.lights.len();
         if s.shadows.map() {
             let far = lights::shadow_far(&point, None, bounds);
@@ -179,9 +186,9 @@ impl LightSet {
                 .extend(lights::point_views(&point, far, s.shadow_size));
             self.view_light.extend(std::iter::repeat_n(li, 6));
         }
-        for mut g in crate::canned::gpu_lights(c) {
+        for mut g in crate::canned::gpu_lights(c, first) {
             if s.shadows.map() {
-                g.shadow_first = first;
+                g.shadow_first = first_view;
                 g.shadow_count = 6;
             }
             g.position = eye.to_array();

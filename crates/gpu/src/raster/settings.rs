@@ -217,7 +217,7 @@ pub struct RasterSettings {
     /// parameterisations).
     pub env_texels: u32,
     /// A canned light source (Heidrich ch. 7) added to the scene's lights (`canned.rs`).
-    pub light_field: Option<CannedLight>,
+    pub light_field: Vec<CannedLight>,
     /// Draw each planar mirror's reflection from the mirrored eye (`raster::mirror`, up to
     /// four, one level deep); false: mirrors reflect the environment maps like any surface.
     pub planar_mirrors: bool,
@@ -288,7 +288,7 @@ impl Default for RasterSettings {
             sky_occlusion: super::ambient::SKY_OCCLUSION_DIRECTIONS,
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
-            light_field: None,
+            light_field: vec![],
             planar_mirrors: true,
             object_field: None,
         }

@@ -381,7 +381,8 @@ fn profile_lookup(layer: u32, nadir: vec3<f32>, c0: vec3<f32>, d: vec3<f32>) -> 
     return mix(mix(a00, a10, tu), mix(a01, a11, tu), tv);
 }
 
-// A canned light's (s,t) slices, one layer per (u,v) grid point (`canned.rs`).
+// The canned lights' (s,t) slices, one layer per (u,v) grid point, light by light, each in
+// the top-left N_s × N_t texels (`canned.rs`).
 @group(0) @binding(17) var slab_slices: texture_2d_array<f32>;
 @group(0) @binding(18) var slab_sampler: sampler;
 
@@ -396,9 +397,9 @@ fn slab_point(li: GpuLight, layer: u32) -> vec3<f32> {
     return li.position + li.edge_u * (a * li.cascade_ends.x) + li.edge_v * (b * li.cascade_ends.y);
 }
 
-// Irradiance at normal incidence (RGB) at `x` from grid point `layer` at `p` (§7.2.2, Eq 7.4):
+// Irradiance at normal incidence (RGB) at `x` from grid point `point` at `p` (§7.2.2, Eq 7.4):
 // a spot light of intensity A·cos θ' (cutoff 90°, exponent 1) × its slice's radiance towards x.
-fn slab_irradiance(li: GpuLight, p: vec3<f32>, layer: u32, x: vec3<f32>) -> vec3<f32> {
+fn slab_irradiance(li: GpuLight, p: vec3<f32>, point: u32, x: vec3<f32>) -> vec3<f32> {
     let d = x - p;
     let r2 = max(dot(d, d), 1e-12);
     let dn = dot(d, li.direction);
@@ -417,7 +418,11 @@ fn slab_irradiance(li: GpuLight, p: vec3<f32>, layer: u32, x: vec3<f32>) -> vec3
     if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
         return vec3<f32>(0.0);
     }
-    let l = textureSampleLevel(slab_slices, slab_sampler, uv, layer, 0.0).rgb;
+    // The slab's N_s × N_t corner of the array, clamped to its edge samples' centres.
+    let dims = vec2<f32>(textureDimensions(slab_slices));
+    let n = vec2<f32>(li.cos_inner, li.cos_outer);
+    let texel = clamp(uv * n, vec2<f32>(0.5), n - vec2<f32>(0.5));
+    let l = textureSampleLevel(slab_slices, slab_sampler, texel / dims, li.attenuation + point, 0.0).rgb;
     let cos_p = dn * inverseSqrt(r2);
     return l * (li.intensity * cos_p / r2);
 }
