@@ -212,12 +212,25 @@ fn lightmap_density(scene: &str) -> Option<f32> {
 }
 
 /// The demo's options of a family's techniques: the reference's light model (physical
-/// fall-off), 2×2 supersampling, and bakes sized to the quality.
+/// fall-off), 2×2 supersampling, and bakes, shadow maps and volumes sized to the quality
+/// (`preview`'s 48 × 48 images need no 2048² shadow maps: those, and the LPV's reflective
+/// shadow maps, cost most of a preview's GPU time on lavapipe).
 fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
+    let preview = quality == Quality::Preview;
     let raster = RasterArgs {
         attenuation: lightlab_gpu::lights::Attenuation::InverseSquare,
         ssaa: 2,
+        shadow_size: if preview { 256 } else { 2048 },
         ..Default::default()
+    };
+    let lpv = if preview {
+        crate::options::LpvArgs {
+            lpv_grid: 16,
+            rsm_size: Some(64),
+            ..Default::default()
+        }
+    } else {
+        Default::default()
     };
     let bake = match family {
         Family::Lightmap => BakeArgs {
@@ -230,9 +243,9 @@ fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
             ..Default::default()
         },
         Family::Sh => BakeArgs {
-            texels_per_metre: Some(12.0),
+            texels_per_metre: Some(if preview { 4.0 } else { 12.0 }),
             transfer_samples: match quality {
-                Quality::Preview => 32,
+                Quality::Preview => 16,
                 Quality::Low => 64,
                 Quality::High => 512,
             },
@@ -242,6 +255,8 @@ fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
         // `canned-light`'s slab of the luminaire, `lightfield-glossy`'s radiance field.
         Family::Phong => BakeArgs {
             slab: crate::options::SlabArgs {
+                slab_uv: if preview { [4, 4] } else { [8, 8] },
+                slab_st: if preview { [32, 32] } else { [64, 64] },
                 slab_samples: match quality {
                     Quality::Preview => 2,
                     Quality::Low => 8,
@@ -250,6 +265,8 @@ fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
                 ..Default::default()
             },
             field: crate::options::FieldArgs {
+                field_uv: preview.then_some(16),
+                field_st: preview.then_some(8),
                 field_spp: match quality {
                     Quality::Preview => 2,
                     Quality::Low => 16,
@@ -261,9 +278,15 @@ fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
         },
         _ => BakeArgs::default(),
     };
+    let sh = crate::options::ShArgs {
+        sh_representatives: if preview { 256 } else { 4096 },
+        ..Default::default()
+    };
     TechniqueArgs {
         raster,
         bake,
+        lpv,
+        sh,
         ..Default::default()
     }
 }
