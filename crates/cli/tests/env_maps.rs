@@ -97,26 +97,13 @@ fn render(glb: &Path, technique: &str, extra: &[&str], out: &Path) {
     ok(&lightlab(&args));
 }
 
-#[test]
-fn prefiltered_environment_reflections_match_the_path_tracer() {
+/// Prefiltered environment reflections (dual paraboloid and cube) against the path tracer on
+/// a ball of each (roughness, model, measured metal, allowed relMSE). Three tests share the
+/// cases so that they run side by side.
+fn prefiltered_reflections_match(cases: &[(f32, BrdfModel, Option<&str>, f64)]) {
     let tmp = tempfile::tempdir().unwrap();
     let p = |n: &str| tmp.path().join(n);
-    // Heidrich's Phong lobe at the exponents the issue names: roughness for exponent n.
-    let phong = |n: f32| (2.0 / (n + 2.0)).powf(0.25);
-    // (roughness, model, measured metal, allowed relMSE): mirror, GGX, the Phong lobe, and
-    // gold's complex index (exact Fresnel).
-    let cases = [
-        (0.0, BrdfModel::Pbr, None, 0.002),
-        (0.1, BrdfModel::Pbr, None, 0.01),
-        (0.3, BrdfModel::Pbr, None, 0.01),
-        (0.6, BrdfModel::Pbr, None, 0.01),
-        (phong(10.0), BrdfModel::Phong, None, 0.005),
-        (phong(100.0), BrdfModel::Phong, None, 0.005),
-        (phong(1000.0), BrdfModel::Phong, None, 0.005),
-        (0.0, BrdfModel::Pbr, Some("gold"), 0.002),
-        (0.3, BrdfModel::Pbr, Some("gold"), 0.01),
-    ];
-    for (r, brdf, metal, limit) in cases {
+    for &(r, brdf, metal, limit) in cases {
         let mut scene = ball(r, brdf);
         if let Some(name) = metal {
             let m = &mut scene.materials[0];
@@ -161,6 +148,39 @@ fn prefiltered_environment_reflections_match_the_path_tracer() {
         );
         assert!(agree <= 0.002, "cube and paraboloid differ: {agree}");
     }
+}
+
+/// Heidrich's Phong lobe at the exponents the issue names: roughness for exponent n.
+fn phong(n: f32) -> f32 {
+    (2.0 / (n + 2.0)).powf(0.25)
+}
+
+#[test]
+fn prefiltered_ggx_reflections_match_the_path_tracer() {
+    prefiltered_reflections_match(&[
+        (0.0, BrdfModel::Pbr, None, 0.002),
+        (0.1, BrdfModel::Pbr, None, 0.01),
+        (0.3, BrdfModel::Pbr, None, 0.01),
+        (0.6, BrdfModel::Pbr, None, 0.01),
+    ]);
+}
+
+#[test]
+fn prefiltered_phong_lobe_reflections_match_the_path_tracer() {
+    prefiltered_reflections_match(&[
+        (phong(10.0), BrdfModel::Phong, None, 0.005),
+        (phong(100.0), BrdfModel::Phong, None, 0.005),
+        (phong(1000.0), BrdfModel::Phong, None, 0.005),
+    ]);
+}
+
+/// Gold's complex index: exact Fresnel.
+#[test]
+fn prefiltered_reflections_of_a_measured_metal_match_the_path_tracer() {
+    prefiltered_reflections_match(&[
+        (0.0, BrdfModel::Pbr, Some("gold"), 0.002),
+        (0.3, BrdfModel::Pbr, Some("gold"), 0.01),
+    ]);
 }
 
 #[test]
