@@ -440,8 +440,9 @@ pub struct RasterArgs {
     /// √(I/0.05 lx)).
     #[arg(long)]
     pub light_radius: Option<f32>,
-    /// Shade every material with this model: pbr, lambert, phong or blinn-phong (default: each
-    /// material's own). Applies to the reference techniques too.
+    /// Shade every material with this model: pbr, lambert, phong, blinn-phong,
+    /// torrance-sparrow, cook-torrance or ward (default: each material's own;
+    /// docs/reflection-models.md). Applies to the reference techniques too.
     #[arg(long)]
     pub brdf: Option<BrdfModel>,
     /// Shadow variant: zfail|zpass (shadow volumes), depth|linear|planar (shadow maps).

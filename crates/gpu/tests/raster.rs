@@ -255,6 +255,93 @@ fn phong_with_shadow_volumes_matches_the_direct_reference() {
     }
 }
 
+/// Heidrich's reflection models (ch. 3): Torrance–Sparrow, Cook–Torrance and Ward on every
+/// surface of `shadows` (glossy metal pillars and spheres, a glossy floor), the GPU's forward
+/// and deferred renders against the path tracer's `direct` render of the same model; point
+/// lights, no ambient. Each GPU image is further from the other models' references (and
+/// from glTF's GGX) than from its own: the lobes differ where it counts.
+#[test]
+fn heidrich_reflection_models_match_the_direct_reference() {
+    let Some(ctx) = test_context() else {
+        return;
+    };
+    let models = [
+        BrdfModel::TorranceSparrow,
+        BrdfModel::CookTorrance,
+        BrdfModel::Ward,
+        BrdfModel::Pbr,
+    ];
+    let scene_of = |model| {
+        let mut scene = builtin::builtin("shadows").unwrap();
+        for m in &mut scene.materials {
+            m.brdf = model;
+            m.roughness = if m.name == "floor" { 0.75 } else { 0.6 };
+            m.metallic = if m.name == "floor" { 0.0 } else { 1.0 };
+            m.specular = 1.0;
+        }
+        scene
+    };
+    let references: Vec<Image> = models
+        .iter()
+        .map(|&m| direct_reference(&scene_of(m), 16, 3))
+        .collect();
+    let ssaa = 4;
+    let mut forward = vec![];
+    for (i, &model) in models.iter().enumerate() {
+        let scene = scene_of(model);
+        for path in [RenderPath::Forward, RenderPath::Deferred] {
+            let mut r = Renderer::new(
+                &ctx,
+                &scene,
+                RasterSettings {
+                    width: N * ssaa,
+                    height: N * ssaa,
+                    path,
+                    shadows: ShadowMethod::VolumesZFail,
+                    attenuation: Attenuation::InverseSquare,
+                    ambient: Ambient::None,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            r.render(&ctx);
+            let img: Image = r.read_hdr(&ctx).unwrap().downsample(ssaa);
+            let e = lightlab_core::metrics::relmse(&img, &references[i]).unwrap();
+            eprintln!("{model:?} {path:?} vs CPU direct: relMSE {e:.5}");
+            assert!(e <= 0.005, "{model:?} {path:?}: relMSE {e}");
+            if path == RenderPath::Forward {
+                forward.push(img);
+            }
+        }
+    }
+    // What tells two models apart: the GPU's difference image against the path tracer's (the
+    // references share their seed, and point lights add no noise beyond the pixel jitter).
+    let norm = |d: &[Vec3]| {
+        d.iter()
+            .map(|c| c.length_squared() as f64)
+            .sum::<f64>()
+            .sqrt()
+    };
+    for i in 0..models.len() {
+        for j in i + 1..models.len() {
+            let diff = |a: &Image, b: &Image| -> Vec<Vec3> {
+                a.data.iter().zip(&b.data).map(|(x, y)| *x - *y).collect()
+            };
+            let (g, r) = (
+                diff(&forward[i], &forward[j]),
+                diff(&references[i], &references[j]),
+            );
+            let miss: Vec<Vec3> = g.iter().zip(&r).map(|(a, b)| *a - *b).collect();
+            let rel = norm(&miss) / norm(&r);
+            eprintln!(
+                "{:?} − {:?}: the GPU's difference is off the path tracer's by {rel:.3} of it",
+                models[i], models[j]
+            );
+            assert!(rel < 0.35, "{:?} vs {:?}: {rel}", models[i], models[j]);
+        }
+    }
+}
+
 /// Fuchs's attenuation functions reach zero at the radius: no light beyond r.
 #[test]
 fn fuchs_attenuation_cuts_off_at_the_radius() {

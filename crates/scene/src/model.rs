@@ -304,6 +304,15 @@ pub enum BrdfModel {
     /// Blinn-Phong as in Fuchs (2005) eq. 3: ρd/π + ρs·N(n)·⟨n,h⟩ⁿ, N normalised so that the
     /// albedo at normal incidence is exactly ρs (`lightlab_core::brdf::BlinnPhong`).
     BlinnPhong,
+    /// Torrance–Sparrow (Heidrich §3.1, §5.1): ρd/π + F·G·D/(4⟨n,l⟩⟨n,v⟩) with Beckmann D
+    /// (RMS slope m = roughness²) and separable Smith G (G1(l)·G1(v), the form Heidrich's
+    /// factorised tables need); F the material's Fresnel.
+    TorranceSparrow,
+    /// Cook–Torrance: the same with the V-groove masking of Eq 3.11.
+    CookTorrance,
+    /// Ward's elliptical Gaussian, isotropic (α = roughness²): ρd/π + ρs·exp(−tan²δ/α²)/
+    /// (4πα²√(⟨n,l⟩⟨n,v⟩)).
+    Ward,
 }
 
 lightlab_core::named_enum!(BrdfModel, "BRDF model", {
@@ -311,9 +320,21 @@ lightlab_core::named_enum!(BrdfModel, "BRDF model", {
     Lambert => "lambert",
     Phong => "phong",
     BlinnPhong => "blinn-phong",
+    TorranceSparrow => "torrance-sparrow",
+    CookTorrance => "cook-torrance",
+    Ward => "ward",
 });
 
 impl BrdfModel {
+    /// Whether the specular lobe is a microfacet (or Ward's Gaussian) lobe of width
+    /// roughness², whose environment term reads the GGX-prefiltered maps.
+    pub fn microfacet(self) -> bool {
+        matches!(
+            self,
+            BrdfModel::Pbr | BrdfModel::TorranceSparrow | BrdfModel::CookTorrance | BrdfModel::Ward
+        )
+    }
+
     /// The Phong/Blinn-Phong exponent of a roughness (clamped to [1, 10⁴]).
     pub fn exponent(roughness: f32) -> f32 {
         lightlab_core::envmap::phong_exponent(roughness)

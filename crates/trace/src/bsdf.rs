@@ -24,13 +24,17 @@
 //!   it cancels along paths that enter and leave a closed object, which is what scenes hold.
 //!   Thin-walled glass (glTF without KHR_materials_volume) is a sheet: straight through,
 //!   reflecting 2F/(1+F), always smooth.
+//! - Other specular lobes (`Material::brdf`, Heidrich ch. 3): Phong and Blinn-Phong (the
+//!   normalised lobes of core, × F0); Torrance–Sparrow (Beckmann D with m = roughness²,
+//!   separable Smith G) and Cook–Torrance (Beckmann D, V-groove G), both with the material's
+//!   Fresnel like the GGX lobe; Ward's isotropic Gaussian (α = roughness², × F0).
 //! - Sampling: one lobe chosen by its estimated albedo; diffuse by cosine (flipped for
 //!   transmission), specular by the distribution of normals D(h)·cosθh. The returned pdf is the
 //!   one-sample mixture, as multiple importance sampling needs.
 
 use glam::{Vec2, Vec3, Vec4};
 use lightlab_core::brdf::Distribution;
-use lightlab_core::brdf::{BlinnPhong, Brdf, Phong};
+use lightlab_core::brdf::{BlinnPhong, Brdf, Masking, Phong, TorranceSparrow, Ward};
 use lightlab_core::color::luminance;
 use lightlab_core::sampling::cosine_hemisphere;
 use lightlab_scene::{BrdfModel, Material, Scene};
@@ -107,6 +111,34 @@ impl Bsdf {
         Distribution::Ggx {
             alpha: self.alpha as f64,
         }
+    }
+
+    /// The reflection lobe's microfacet distribution: GGX for the glTF model, Beckmann of the
+    /// same width for Torrance–Sparrow and Cook–Torrance.
+    #[inline]
+    fn lobe_distribution(&self) -> Distribution {
+        match self.model {
+            BrdfModel::TorranceSparrow | BrdfModel::CookTorrance => Distribution::Beckmann {
+                m: self.alpha as f64,
+            },
+            _ => self.ggx(),
+        }
+    }
+
+    /// The reflection lobe's masking–shadowing G(wo, wi, h).
+    fn masking(&self, wo: Vec3, wi: Vec3, h: Vec3) -> f32 {
+        let masking = match self.model {
+            BrdfModel::TorranceSparrow => Masking::Smith,
+            BrdfModel::CookTorrance => Masking::VGroove,
+            _ => Masking::SmithHeightCorrelated,
+        };
+        TorranceSparrow {
+            ks: 1.0,
+            eta: 1.5,
+            distribution: self.lobe_distribution(),
+            masking,
+        }
+        .g(wi.as_dvec3(), wo.as_dvec3(), h.as_dvec3()) as f32
     }
 
     /// The BSDF of `material` at texture coordinate `uv`, seen from local direction `wo`.
@@ -206,7 +238,8 @@ impl Bsdf {
         }
     }
 
-    /// The classical lobes of [`BrdfModel::Phong`] and [`BrdfModel::BlinnPhong`], from core
+    /// The classical lobes of [`BrdfModel::Phong`], [`BrdfModel::BlinnPhong`] and
+    /// [`BrdfModel::Ward`], from core
     /// (normalised, unit reflectance; scaled by `f0` as the specular colour).
     fn classic<R>(&self, f: impl FnOnce(&dyn Brdf) -> R) -> Option<R> {
         let n = self.exponent as f64;
@@ -220,6 +253,12 @@ impl Bsdf {
                 ks: 1.0,
                 exponent: n,
                 normalized: true,
+            })),
+            BrdfModel::Ward => Some(f(&Ward {
+                kd: 0.0,
+                ks: 1.0,
+                alpha_x: self.alpha as f64,
+                alpha_y: self.alpha as f64,
             })),
             _ => None,
         }
@@ -338,9 +377,8 @@ impl Bsdf {
                 return f + self.f0 * c as f32;
             }
             let h = (wo + wi).normalize();
-            let ggx = self.ggx();
-            let d = ggx.d(h.z as f64) as f32;
-            let g = (1.0 / (1.0 + ggx.lambda(wo.z as f64) + ggx.lambda(wi.z as f64))) as f32;
+            let d = self.lobe_distribution().d(h.z as f64) as f32;
+            let g = self.masking(wo, wi, h);
             let fr = self.fresnel(wo.dot(h));
             f += fr * (d * g / (4.0 * wo.z * wi.z));
         }
@@ -368,7 +406,7 @@ impl Bsdf {
             p as f32
         } else {
             let h = (wo + wi).normalize();
-            self.ggx().d(h.z as f64) as f32 * h.z / (4.0 * wo.dot(h).abs().max(1e-8))
+            self.lobe_distribution().d(h.z as f64) as f32 * h.z / (4.0 * wo.dot(h).abs().max(1e-8))
         };
         self.p_spec * ps + (1.0 - self.p_spec) * pd
     }
@@ -396,7 +434,7 @@ impl Bsdf {
             if let Some(wi) = self.classic(|b| b.sample(wo.as_dvec3(), u.as_dvec2())) {
                 wi?.as_vec3()
             } else {
-                let h = self.ggx().sample_h(u.as_dvec2()).as_vec3();
+                let h = self.lobe_distribution().sample_h(u.as_dvec2()).as_vec3();
                 let wi = 2.0 * wo.dot(h) * h - wo;
                 if wi.z <= 0.0 {
                     return None;
@@ -525,6 +563,30 @@ mod tests {
                 roughness: 0.3,
                 metallic: 1.0,
                 conductor: lightlab_scene::Conductor::preset("gold"),
+                ..Default::default()
+            },
+            Material {
+                name: "torrance-sparrow".into(),
+                base_color: Vec4::new(0.7, 0.5, 0.3, 1.0),
+                roughness: 0.4,
+                metallic: 1.0,
+                brdf: BrdfModel::TorranceSparrow,
+                ..Default::default()
+            },
+            Material {
+                name: "cook-torrance".into(),
+                base_color: Vec4::new(0.2, 0.3, 0.8, 1.0),
+                roughness: 0.3,
+                specular: 1.0,
+                brdf: BrdfModel::CookTorrance,
+                ..Default::default()
+            },
+            Material {
+                name: "ward".into(),
+                base_color: Vec4::new(0.4, 0.4, 0.4, 1.0),
+                roughness: 0.5,
+                specular: 5.0,
+                brdf: BrdfModel::Ward,
                 ..Default::default()
             },
         ];

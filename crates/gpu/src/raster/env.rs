@@ -119,10 +119,10 @@ fn lobes(scene: &Scene, prefilter: EnvPrefilter) -> Vec<Lobe> {
         EnvPrefilter::Ggx => vec![Lobe::Ggx],
         EnvPrefilter::Auto => {
             let mut l = vec![];
-            if mats.iter().any(|m| m.brdf == BrdfModel::Pbr) {
+            if mats.iter().any(|m| m.brdf.microfacet()) {
                 l.push(Lobe::Ggx);
             }
-            if mats.iter().any(|m| m.brdf != BrdfModel::Pbr) {
+            if mats.iter().any(|m| !m.brdf.microfacet()) {
                 l.push(Lobe::Phong);
             }
             l

@@ -245,6 +245,31 @@ fn diffuse_coef(s: Surface, nv: f32) -> vec3<f32> {
     return s.diffuse * (kd * (1.0 - s.transmission) / PI);
 }
 
+// erfc(x) to 1.2e-7 relative (Numerical Recipes' Chebyshev fit; lightlab_core::brdf::erfc).
+fn erfc_approx(x: f32) -> f32 {
+    let z = abs(x);
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t * exp(-z * z - 1.26551223 + t * (1.00002368 + t * (0.37409196 + t * (0.09678418
+        + t * (-0.18628806 + t * (0.27886807 + t * (-1.13520398 + t * (1.48851587
+        + t * (-0.82215223 + t * 0.17087277)))))))));
+    return select(2.0 - r, r, x >= 0.0);
+}
+
+// Smith's Λ of a Beckmann surface of RMS slope m for a direction of cosine c
+// (lightlab_core::brdf::Distribution::lambda).
+fn beckmann_lambda(c: f32, m: f32) -> f32 {
+    let c2 = clamp(c * c, 1e-12, 1.0);
+    let tan = sqrt((1.0 - c2) / c2);
+    if tan <= 0.0 {
+        return 0.0;
+    }
+    let a = 1.0 / (m * tan);
+    if a > 8.0 {
+        return 0.0;
+    }
+    return 0.5 * (exp(-a * a) / (a * 1.7724539) - erfc_approx(a));
+}
+
 // f(v, l)·⟨n,l⟩ for the front side, the same models as the path tracer (`trace::bsdf`).
 fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     let nl = dot(s.n, l);
@@ -271,6 +296,29 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
         // the environment term sees.
         let frosted = select(0.0, s.delta, s.roughness >= 0.05 && s.thin == 0u);
         f += vec3<f32>(fresnel_dielectric(dot(v, h), s.ior) * d * g / (4.0 * nv * nl) * frosted);
+    } else if s.model == 4u || s.model == 5u {
+        // Torrance–Sparrow (separable Smith G) and Cook–Torrance (V-groove G): Beckmann D of
+        // RMS slope m = roughness², the material's Fresnel (trace::bsdf).
+        let h = normalize(v + l);
+        let m = max(s.roughness * s.roughness, 1e-3);
+        let nh = max(dot(s.n, h), 1e-6);
+        let c2 = nh * nh;
+        let d = exp(-(1.0 - c2) / (c2 * m * m)) / (PI * m * m * c2 * c2);
+        var g: f32;
+        if s.model == 4u {
+            g = 1.0 / ((1.0 + beckmann_lambda(nv, m)) * (1.0 + beckmann_lambda(nl, m)));
+        } else {
+            let vh = max(dot(v, h), 1e-6);
+            g = clamp(min(2.0 * nh * nv / vh, 2.0 * nh * nl / vh), 0.0, 1.0);
+        }
+        f += surface_fresnel(s, dot(v, h)) * (d * g / (4.0 * nv * nl));
+    } else if s.model == 6u {
+        // Ward's isotropic Gaussian, α = roughness², × F0 (lightlab_core::brdf::Ward).
+        let h = normalize(v + l);
+        let a = max(s.roughness * s.roughness, 1e-3);
+        let nh = max(dot(s.n, h), 1e-6);
+        let tan2 = (1.0 - nh * nh) / (nh * nh);
+        f += s.f0 * (exp(-tan2 / (a * a)) / (4.0 * PI * a * a * sqrt(nl * nv)));
     } else if s.model == 2u {
         let e = phong_exponent(s.roughness);
         let r = 2.0 * nv * s.n - v;

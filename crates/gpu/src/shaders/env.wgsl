@@ -359,7 +359,8 @@ fn env_irradiance(n: vec3<f32>) -> vec3<f32> {
 
 fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32, base: u32) -> vec3<f32> {
     let lod = clamp(log2(max(dr, 1e-8) / max(env_u.texel_angle, 1e-8)), 0.0, max(env_u.mips - 1.0, 0.0));
-    let ggx = (env_u.prefilter == 2u) | ((env_u.prefilter == 0u) & (s.model == 0u));
+    // The microfacet models (pbr, torrance-sparrow, cook-torrance, ward) read the GGX maps.
+    let ggx = (env_u.prefilter == 2u) | ((env_u.prefilter == 0u) & ((s.model == 0u) | (s.model >= 4u)));
     var out = vec3<f32>(0.0);
     if ggx {
         let l = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
