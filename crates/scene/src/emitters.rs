@@ -35,10 +35,15 @@ type Tri = ([Vec3; 3], f32);
 impl Scene {
     /// The emissive instances that are roughly planar (|Σ aᵢnᵢ| ≥ ½·Σ aᵢ), brightest (radiance
     /// luminance × area) first. Others are left out: a Lambertian rectangle would misrepresent
-    /// them.
+    /// them. So is a luminaire's geometry (`Instance::luminaire`): its emitter sits behind
+    /// reflectors, lenses and a housing, and its light reaches the room through its window (a
+    /// canned light, or the reference's lamp emitter), not as a bare rectangle.
     pub fn planar_emitters(&self) -> Vec<PlanarEmitter> {
         let mut out = vec![];
         for (ii, inst) in self.instances.iter().enumerate() {
+            if inst.luminaire.is_some() {
+                continue;
+            }
             let Some(mesh) = self.meshes.get(inst.mesh) else {
                 continue;
             };
