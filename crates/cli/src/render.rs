@@ -201,7 +201,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         return render_shard(&a, &scene, &settings, shard);
     }
     let t0 = Instant::now();
-    let slabs = canned_slabs(&a)?;
+    let slabs = crate::techniques::canned::read(&a.gpu.light_field)?;
     let img = render_reference(&scene, a.technique, &settings, &slabs)?;
     let secs = t0.elapsed().as_secs_f64();
     write_output(&a, &img)?;
@@ -250,19 +250,6 @@ fn depth_range(a: &RenderArgs) -> Result<(u32, u32)> {
     }
 }
 
-/// The light slabs of `--light-field`, for the path tracer.
-fn canned_slabs(a: &RenderArgs) -> Result<Vec<Arc<LightSlab>>> {
-    a.gpu
-        .light_field
-        .iter()
-        .map(|dir| {
-            LightSlab::read(dir)
-                .map(Arc::new)
-                .with_context(|| format!("reading the light slab in {}", dir.display()))
-        })
-        .collect()
-}
-
 /// `render --shard I/N`: the shard's rows into a part folder.
 fn render_shard(
     a: &RenderArgs,
@@ -286,7 +273,7 @@ fn render_shard(
         tonemap: a.tonemap.name().into(),
         camera_model: settings.lens.describe(),
     };
-    let slabs = canned_slabs(a)?;
+    let slabs = crate::techniques::canned::read(&a.gpu.light_field)?;
     let (traced, windows) = windowed(scene, &slabs);
     let accel = Accel::new(&traced);
     let mut pt = PathTracer::new(&traced, &accel);

@@ -329,6 +329,71 @@ fn refraction_field_bakes_once_and_renders_in_any_environment() {
     assert!(stderr(&o).contains("field.json"), "{}", stderr(&o));
 }
 
+/// Two light slabs baked by `bake --method light-field`, one per luminaire of `luminaire`
+/// (the projector's (s,t) plane at its focus), then passed together to `direct` (the slabs as
+/// emitters) and to `canned-light`; a folder that holds no slab is refused, writing nothing.
+#[test]
+fn light_slabs_bake_per_luminaire_and_light_the_scene_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = [
+        "--slab-uv",
+        "2x2",
+        "--slab-st",
+        "8x8",
+        "--slab-samples",
+        "1",
+    ];
+    let mut slabs = vec![];
+    for lamp in ["reflector", "projector"] {
+        let out = dir.path().join(lamp);
+        let mut a = vec!["bake", "--scene", "luminaire", "--method", "light-field"];
+        a.extend([
+            "--luminaire",
+            lamp,
+            "--json",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        a.extend(small);
+        let o = lightlab(&a);
+        assert!(o.status.success(), "{lamp}: {}", stderr(&o));
+        let last = stdout(&o).lines().last().unwrap().to_string();
+        let v: serde_json::Value = serde_json::from_str(&last).unwrap();
+        assert_eq!(v["luminaire"], lamp);
+        // The projector is focused on its screen; the reflector's slab ends at infinity.
+        assert_eq!(v["far"].is_number(), lamp == "projector", "{last}");
+        slabs.push(out.to_str().unwrap().to_string());
+    }
+    for t in ["direct", "canned-light"] {
+        let img = dir.path().join(format!("{t}.exr"));
+        let mut a = vec!["render", "--scene", "luminaire", "--technique", t];
+        a.extend(["--width", "32", "--height", "24", "--spp", "2"]);
+        for s in &slabs {
+            a.extend(["--light-field", s.as_str()]);
+        }
+        a.extend(["-o", img.to_str().unwrap()]);
+        let o = lightlab(&a);
+        assert!(o.status.success(), "{t}: {}", stderr(&o));
+        assert!(img.exists());
+    }
+    let out = dir.path().join("none.exr");
+    assert_fails_cleanly(
+        &[
+            "render",
+            "--scene",
+            "luminaire",
+            "--technique",
+            "canned-light",
+            "--light-field",
+            dir.path().to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        &out,
+        "reading the light slab",
+    );
+}
+
 #[test]
 fn bake_methods_that_do_not_apply_say_what_to_do() {
     // A light slab needs a luminaire: the error says how to mark one.

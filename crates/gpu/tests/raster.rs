@@ -211,6 +211,28 @@ fn directional_cascades_match_ray_cast_visibility() {
     }
 }
 
+/// Direct light of `scene`'s point lights on the GPU with shadow volumes, no ambient, 4 × 4
+/// supersampled to N².
+fn direct_on_the_gpu(ctx: &GpuContext, scene: &Scene, path: RenderPath) -> Image {
+    let ssaa = 4;
+    let mut r = Renderer::new(
+        ctx,
+        scene,
+        RasterSettings {
+            width: N * ssaa,
+            height: N * ssaa,
+            path,
+            shadows: ShadowMethod::VolumesZFail,
+            attenuation: Attenuation::InverseSquare,
+            ambient: Ambient::None,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    r.render(ctx);
+    r.read_hdr(ctx).unwrap().downsample(ssaa)
+}
+
 /// Lambert floor, Blinn-Phong stone and paint: the GPU's forward and deferred renders with
 /// shadow volumes against the path tracer's `direct` render of the same models.
 #[test]
@@ -227,24 +249,8 @@ fn phong_with_shadow_volumes_matches_the_direct_reference() {
         };
     }
     let reference = direct_reference(&scene, 16, 3);
-    let ssaa = 4;
     for path in [RenderPath::Forward, RenderPath::Deferred] {
-        let mut r = Renderer::new(
-            &ctx,
-            &scene,
-            RasterSettings {
-                width: N * ssaa,
-                height: N * ssaa,
-                path,
-                shadows: ShadowMethod::VolumesZFail,
-                attenuation: Attenuation::InverseSquare,
-                ambient: Ambient::None,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        r.render(&ctx);
-        let img: Image = r.read_hdr(&ctx).unwrap().downsample(ssaa);
+        let img = direct_on_the_gpu(&ctx, &scene, path);
         let e = lightlab_core::metrics::relmse(&img, &reference).unwrap();
         let mean = |i: &Image| i.data.iter().map(|c| c.x + c.y + c.z).sum::<f32>();
         eprintln!(
@@ -285,27 +291,11 @@ fn heidrich_reflection_models_match_the_direct_reference() {
         .iter()
         .map(|&m| direct_reference(&scene_of(m), 16, 3))
         .collect();
-    let ssaa = 4;
     let mut forward = vec![];
     for (i, &model) in models.iter().enumerate() {
         let scene = scene_of(model);
         for path in [RenderPath::Forward, RenderPath::Deferred] {
-            let mut r = Renderer::new(
-                &ctx,
-                &scene,
-                RasterSettings {
-                    width: N * ssaa,
-                    height: N * ssaa,
-                    path,
-                    shadows: ShadowMethod::VolumesZFail,
-                    attenuation: Attenuation::InverseSquare,
-                    ambient: Ambient::None,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
-            r.render(&ctx);
-            let img: Image = r.read_hdr(&ctx).unwrap().downsample(ssaa);
+            let img = direct_on_the_gpu(&ctx, &scene, path);
             let e = lightlab_core::metrics::relmse(&img, &references[i]).unwrap();
             eprintln!("{model:?} {path:?} vs CPU direct: relMSE {e:.5}");
             assert!(e <= 0.005, "{model:?} {path:?}: relMSE {e}");

@@ -70,15 +70,7 @@ pub fn lights(
     a: &TechniqueArgs,
 ) -> Result<Vec<Arc<LightSlab>>> {
     if !a.light_field.is_empty() {
-        return a
-            .light_field
-            .iter()
-            .map(|dir| {
-                LightSlab::read(dir)
-                    .map(Arc::new)
-                    .with_context(|| format!("reading the light slab in {}", dir.display()))
-            })
-            .collect();
+        return read(&a.light_field);
     }
     if technique != Technique::CannedLight {
         return Ok(vec![]);
@@ -93,6 +85,17 @@ pub fn lights(
                 scene.name, s.slab_uv[0], s.slab_uv[1], s.slab_st[0], s.slab_st[1], s.slab_samples
             );
             Ok(Arc::new(bake(scene, name, s, a.bake.bake_seed)?))
+        })
+        .collect()
+}
+
+/// The light slabs in the folders `dirs` (`--light-field`).
+pub fn read(dirs: &[std::path::PathBuf]) -> Result<Vec<Arc<LightSlab>>> {
+    dirs.iter()
+        .map(|dir| {
+            LightSlab::read(dir)
+                .map(Arc::new)
+                .with_context(|| format!("reading the light slab in {}", dir.display()))
         })
         .collect()
 }
