@@ -230,7 +230,7 @@ impl LensMorph {
 
     /// Wait until the GPU has drawn everything added so far (for timing).
     pub fn wait(&self, ctx: &GpuContext) {
-        let _ = ctx.device.poll(wgpu::PollType::wait_indefinitely());
+        let _ = crate::wait_idle(&ctx.device);
     }
 
     /// The film's image (linear radiance).

@@ -138,6 +138,20 @@ impl GpuContext {
     }
 }
 
+/// Wait until the device has finished the work submitted so far. `wait_indefinitely` can still
+/// report a timeout on the GL backend (its fence waits are bounded, and llvmpipe under load
+/// can take longer than the bound); a timeout is retried for up to ten minutes.
+pub fn wait_idle(device: &wgpu::Device) -> Result<(), wgpu::PollError> {
+    let start = std::time::Instant::now();
+    loop {
+        match device.poll(wgpu::PollType::wait_indefinitely()) {
+            Err(wgpu::PollError::Timeout)
+                if start.elapsed() < std::time::Duration::from_secs(600) => {}
+            r => return r.map(|_| ()),
+        }
+    }
+}
+
 /// For tests: a context, or None with a message when no adapter exists and we are not under CI.
 /// Under `CI=true` a missing adapter panics: GPU tests never skip silently there.
 pub fn test_context() -> Option<GpuContext> {

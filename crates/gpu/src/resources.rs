@@ -232,9 +232,7 @@ fn read_mip_in_bands(
             ctx.queue.submit([enc.finish()]);
             let slice = buf.slice(..row * rows as u64);
             slice.map_async(wgpu::MapMode::Read, |_| {});
-            ctx.device
-                .poll(wgpu::PollType::wait_indefinitely())
-                .map_err(|e| ReadbackError(e.to_string()))?;
+            crate::wait_idle(&ctx.device).map_err(|e| ReadbackError(e.to_string()))?;
             {
                 let data = slice
                     .get_mapped_range()

@@ -59,9 +59,7 @@ fn compute_shader_round_trip() {
     readback
         .slice(..)
         .map_async(wgpu::MapMode::Read, |r| r.expect("map"));
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .expect("poll");
+    lightlab_gpu::wait_idle(device).expect("poll");
     let view = readback.slice(..).get_mapped_range().expect("mapped range");
     let out: Vec<u32> = bytemuck::cast_slice(&view[..]).to_vec();
     for (i, v) in out.iter().enumerate() {

@@ -614,7 +614,7 @@ impl DynamicEnv {
         let (_, _, read) = self.queries.as_ref()?;
         let slice = read.slice(..16);
         slice.map_async(wgpu::MapMode::Read, |_| {});
-        ctx.device.poll(wgpu::PollType::wait_indefinitely()).ok()?;
+        crate::wait_idle(&ctx.device).ok()?;
         let ms = {
             let data = slice.get_mapped_range().ok()?;
             let t: &[u64] = bytemuck::cast_slice(&data);

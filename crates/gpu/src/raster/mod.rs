@@ -406,7 +406,7 @@ impl Renderer {
         {
             let slice = read.slice(..labels.len() as u64 * 16);
             slice.map_async(wgpu::MapMode::Read, |_| {});
-            let _ = ctx.device.poll(wgpu::PollType::wait_indefinitely());
+            let _ = crate::wait_idle(&ctx.device);
             if let Ok(data) = slice.get_mapped_range() {
                 let ticks: &[u64] = bytemuck::cast_slice(&data);
                 let period = ctx.queue.get_timestamp_period() as f64;
@@ -417,7 +417,7 @@ impl Renderer {
             }
             read.unmap();
         } else {
-            let _ = ctx.device.poll(wgpu::PollType::wait_indefinitely());
+            let _ = crate::wait_idle(&ctx.device);
         }
         times.wall_ms = t0.elapsed().as_secs_f64() * 1e3;
         times
