@@ -441,8 +441,8 @@ pub struct RasterArgs {
     #[arg(long)]
     pub light_radius: Option<f32>,
     /// Shade every material with this model: pbr, lambert, phong, blinn-phong,
-    /// torrance-sparrow, cook-torrance or ward (default: each material's own;
-    /// docs/reflection-models.md). Applies to the reference techniques too.
+    /// torrance-sparrow, cook-torrance, ward, banks or lafortune (default: each material's
+    /// own; docs/reflection-models.md). Applies to the reference techniques too.
     #[arg(long)]
     pub brdf: Option<BrdfModel>,
     /// Shadow variant: zfail|zpass (shadow volumes), depth|linear|planar (shadow maps).

@@ -610,6 +610,16 @@ pub struct Banks {
 }
 
 impl Banks {
+    /// The specular coefficient that gives the lobe (√(1−a²)√(1−b²) − ab)ⁿ unit albedo for a
+    /// viewer along the normal: 1/(4·W(n+2)), W(m) = ∫₀^{π/2} sinᵐφ dφ (Wallis). The lobe is
+    /// a cone around the fibre, not a spot: its albedo grows as √n where a Phong lobe's stays
+    /// bounded, so Lewis's (n+2)/(2π) would not do. Derivation: with v = n, b = 0 and the lobe
+    /// is (1 − ⟨l,t⟩²)^{n/2}; integrating over the hemisphere (u = sin²θ, then by parts in φ)
+    /// gives 4·W(n+2).
+    pub fn normalization(n: f64) -> f64 {
+        1.0 / (4.0 * wallis(n + 2.0))
+    }
+
     /// The 2-D table entry for (a, b) = (⟨l,t⟩, ⟨v,t⟩): what Heidrich stores in one texture.
     pub fn table(&self, a: f64, b: f64) -> f64 {
         let sa = (1.0 - a * a).max(0.0).sqrt();
@@ -637,6 +647,22 @@ impl Brdf for Banks {
     fn energy_conserving(&self) -> bool {
         false
     }
+}
+
+/// W(m) = ∫₀^{π/2} sinᵐφ dφ = (√π/2)·Γ((m+1)/2)/Γ(m/2+1) for real m ≥ 0: the gamma ratio
+/// Γ(x+½)/Γ(x+1) by its asymptotic series once x ≥ 32, reached by the recurrence
+/// r(x) = r(x+1)·(x+1)/(x+½). Relative error below 1e-9.
+pub fn wallis(m: f64) -> f64 {
+    let mut x = m / 2.0;
+    let mut scale = 1.0;
+    while x < 32.0 {
+        scale *= (x + 1.0) / (x + 0.5);
+        x += 1.0;
+    }
+    let y = 1.0 / x;
+    let series =
+        1.0 - y / 8.0 + y * y / 128.0 + 5.0 * y.powi(3) / 1024.0 - 21.0 * y.powi(4) / 32768.0;
+    0.5 * PI.sqrt() * scale * series / x.sqrt()
 }
 
 // ---- factorised Torrance–Sparrow (Heidrich §5.1) -----------------------------------------------

@@ -535,3 +535,57 @@ fn banks_table_matches_the_explicit_construction() {
         assert!((table - best.max(0.0)).abs() < 1e-6, "{table} vs {best}");
     }
 }
+
+/// W(m) = ∫₀^{π/2} sinᵐ: exact at integers (W(0) = π/2, W(1) = 1, W(m) = (m−1)/m·W(m−2)), and
+/// at real m equal to the gamma ratio computed independently (Lanczos ln Γ above).
+#[test]
+fn wallis_integral_is_exact() {
+    let mut w = [PI / 2.0, 1.0];
+    for m in 0..200usize {
+        let exact = if m < 2 {
+            w[m]
+        } else {
+            let v = (m as f64 - 1.0) / m as f64 * w[m % 2];
+            w[m % 2] = v;
+            v
+        };
+        let got = wallis(m as f64);
+        assert!(
+            (got / exact - 1.0).abs() < 1e-9,
+            "W({m}) = {got}, exact {exact}"
+        );
+    }
+    for m in [0.3, 2.7, 13.1, 55.5, 1234.5] {
+        let exact = 0.5 * PI.sqrt() * (ln_gamma((m + 1.0) / 2.0) - ln_gamma(m / 2.0 + 1.0)).exp();
+        assert!((wallis(m) / exact - 1.0).abs() < 1e-8, "W({m})");
+    }
+}
+
+/// Banks's normalised lobe has unit albedo for a viewer along the normal, at any exponent
+/// (midpoint quadrature over the hemisphere).
+#[test]
+fn banks_normalisation_gives_unit_albedo_at_normal_incidence() {
+    for n in [1.0, 8.0, 60.0, 400.0] {
+        let b = Banks {
+            kd: 0.0,
+            ks: Banks::normalization(n),
+            exponent: n,
+        };
+        let (nt, np) = (2000, 2000);
+        let mut sum = 0.0;
+        for i in 0..nt {
+            let theta = (i as f64 + 0.5) / nt as f64 * PI / 2.0;
+            for j in 0..np {
+                let phi = (j as f64 + 0.5) / np as f64 * 2.0 * PI;
+                let l = DVec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                );
+                sum += b.eval(l, DVec3::Z) * l.z * theta.sin();
+            }
+        }
+        let albedo = sum * (PI / 2.0 / nt as f64) * (2.0 * PI / np as f64);
+        assert!((albedo - 1.0).abs() < 2e-3, "n = {n}: albedo {albedo}");
+    }
+}

@@ -507,6 +507,8 @@ fn gpu_material(m: &lightlab_scene::Material) -> GpuMaterial {
             lightlab_scene::BrdfModel::TorranceSparrow => 4,
             lightlab_scene::BrdfModel::CookTorrance => 5,
             lightlab_scene::BrdfModel::Ward => 6,
+            lightlab_scene::BrdfModel::Banks => 7,
+            lightlab_scene::BrdfModel::Lafortune => 8,
         },
         flags,
         uv_sets,
@@ -523,6 +525,13 @@ fn gpu_material(m: &lightlab_scene::Material) -> GpuMaterial {
             .conductor
             .map_or([0.0; 4], |c| c.eta.extend(1.0).to_array()),
         conductor_k: m.conductor.map_or([0.0; 4], |c| c.k.extend(1.0).to_array()),
+        anisotropy: [
+            m.anisotropy.clamp(0.0, 1.0),
+            m.anisotropy_rotation.cos(),
+            m.anisotropy_rotation.sin(),
+            0.0,
+        ],
+        lafortune: m.lafortune.extend(0.0).to_array(),
     }
 }
 

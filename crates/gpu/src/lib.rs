@@ -101,7 +101,7 @@ impl GpuContext {
             label: Some("lightlab"),
             required_features: adapter.features() & wanted,
             // Down-level limits, with the adapter's resolution and colour-attachment limits
-            // (the deferred G-buffer pass writes 5 targets, 48 bytes per sample).
+            // (the deferred G-buffer pass writes 6 targets, 56 bytes per sample).
             required_limits: wgpu::Limits {
                 max_color_attachments: adapter.limits().max_color_attachments,
                 max_color_attachment_bytes_per_sample:

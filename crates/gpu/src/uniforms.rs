@@ -156,6 +156,10 @@ pub struct GpuMaterial {
     /// A measured metal's complex index η + ik (xyz), w = 1 when present.
     pub conductor_eta: [f32; 4],
     pub conductor_k: [f32; 4],
+    /// KHR_materials_anisotropy: (strength, cos rotation, sin rotation, 0).
+    pub anisotropy: [f32; 4],
+    /// The Lafortune lobe's (C_x, C_y, C_z, 0).
+    pub lafortune: [f32; 4],
 }
 
 /// The WGSL source that declares these structs.
@@ -282,7 +286,9 @@ mod tests {
                     thickness,
                     uv_transform,
                     conductor_eta,
-                    conductor_k
+                    conductor_k,
+                    anisotropy,
+                    lafortune
                 ),
             ),
         ];

@@ -4,7 +4,8 @@
 //! (POSITION, NORMAL, TANGENT, TEXCOORD_0/1, COLOR_0, indices; strips and fans converted),
 //! EXT_mesh_gpu_instancing, metallic–roughness materials with KHR_materials_emissive_strength,
 //! KHR_materials_specular, KHR_materials_diffuse_transmission, KHR_materials_transmission,
-//! KHR_materials_ior and KHR_materials_volume (its thickness factor only), textures with
+//! KHR_materials_ior, KHR_materials_volume (its thickness factor only) and
+//! KHR_materials_anisotropy (strength and rotation; the texture is not read), textures with
 //! KHR_texture_transform, perspective cameras (a node's scale scales znear and zfar) and
 //! KHR_lights_punctual.
 //!
@@ -15,7 +16,9 @@
 //! - a decimated mesh's `extras.lightlab.detailSource` = the index of the glTF mesh it was
 //!   simplified from (loaded even when no node shows it), for detail baking;
 //! - a camera's `extras.lightlab.lens = { model, aperture, focusDistance, thickness, scale }`
-//!   (`CameraLens`).
+//!   (`CameraLens`);
+//! - a material's `extras.lightlab.brdf` (a `BrdfModel` name), `conductor`, `sway` and
+//!   `lafortune` = [Cx, Cy, Cz].
 //!
 //! Export writes one binary blob (GLB chunk, or `<stem>.bin` beside a `.gltf`) holding all
 //! geometry and the textures as PNG, plus `<stem>.env.exr` when the scene has an environment.
@@ -38,7 +41,7 @@ pub const MAX_NODE_DEPTH: usize = 1024;
 /// bounds its vertex buffers: about 10 GB).
 pub const MAX_TRIANGLES: u64 = 100_000_000;
 
-pub const SUPPORTED_EXTENSIONS: [&str; 9] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 10] = [
     "KHR_lights_punctual",
     "KHR_materials_transmission",
     "KHR_materials_ior",
@@ -48,6 +51,7 @@ pub const SUPPORTED_EXTENSIONS: [&str; 9] = [
     "KHR_materials_emissive_strength",
     "KHR_materials_specular",
     "KHR_materials_diffuse_transmission",
+    "KHR_materials_anisotropy",
 ];
 
 fn gltf_err(path: &Path, e: impl std::fmt::Display) -> SceneError {
@@ -133,11 +137,12 @@ fn check_required_extensions(path: &Path, bytes: &[u8]) -> Result<(), SceneError
 
 /// The extensions lightlab reads that the gltf crate's validator refuses as *required* (it
 /// knows only its own features' extensions).
-const REQUIRED_FOR_LIGHTLAB: [&str; 4] = [
+const REQUIRED_FOR_LIGHTLAB: [&str; 5] = [
     "EXT_mesh_gpu_instancing",
     "KHR_materials_volume",
     "KHR_materials_specular",
     "KHR_materials_diffuse_transmission",
+    "KHR_materials_anisotropy",
 ];
 
 /// The file with [`REQUIRED_FOR_LIGHTLAB`] taken out of `extensionsRequired` (after
@@ -782,6 +787,34 @@ impl Importer<'_> {
                 )
             })?,
         };
+        let aniso = m.extension_value("KHR_materials_anisotropy");
+        let aniso_f = |k: &str| {
+            aniso
+                .and_then(|v| v.get(k)?.as_f64())
+                .filter(|x| x.is_finite())
+        };
+        if aniso.and_then(|v| v.get("anisotropyTexture")).is_some() {
+            self.scene.warnings.push(format!(
+                "material '{}': KHR_materials_anisotropy's anisotropyTexture is not read (its \
+                 strength and rotation are)",
+                m.name().unwrap_or("material")
+            ));
+        }
+        let lafortune = match extras_json(m.extras())
+            .and_then(|v| v.get("lightlab")?.get("lafortune").cloned())
+        {
+            None => Vec3::new(-1.0, -1.0, 1.0),
+            Some(v) => vec3_of(&v).ok_or_else(|| {
+                gltf_err(
+                    self.path,
+                    format!(
+                        "material '{}': extras.lightlab.lafortune must be three finite numbers \
+                         [Cx, Cy, Cz]",
+                        m.name().unwrap_or("material")
+                    ),
+                )
+            })?,
+        };
         let conductor = conductor_extras(m).map_err(|e| {
             gltf_err(
                 self.path,
@@ -829,6 +862,9 @@ impl Importer<'_> {
                 .and_then(|v| v.get("thicknessFactor")?.as_f64())
                 .filter(|t| t.is_finite() && *t > 0.0)
                 .unwrap_or(0.0) as f32,
+            anisotropy: aniso_f("anisotropyStrength").unwrap_or(0.0).clamp(0.0, 1.0) as f32,
+            anisotropy_rotation: aniso_f("anisotropyRotation").unwrap_or(0.0) as f32,
+            lafortune,
         })
     }
 
@@ -1320,12 +1356,22 @@ fn material_json(m: &Material, used: &mut Vec<&'static str>) -> Value {
         }
         exts.insert("KHR_materials_diffuse_transmission".into(), dt);
     }
+    if m.anisotropy != 0.0 || m.anisotropy_rotation != 0.0 {
+        use_ext_in(used, "KHR_materials_anisotropy");
+        exts.insert(
+            "KHR_materials_anisotropy".into(),
+            json!({ "anisotropyStrength": m.anisotropy, "anisotropyRotation": m.anisotropy_rotation }),
+        );
+    }
     if !exts.is_empty() {
         v["extensions"] = Value::Object(exts);
     }
     let mut extras = serde_json::Map::new();
     if m.brdf != BrdfModel::Pbr {
         extras.insert("brdf".into(), json!(m.brdf.name()));
+    }
+    if m.lafortune != Vec3::new(-1.0, -1.0, 1.0) {
+        extras.insert("lafortune".into(), json!(m.lafortune.to_array()));
     }
     if m.sway != 0.0 {
         extras.insert("sway".into(), json!(m.sway));
@@ -1341,6 +1387,17 @@ fn material_json(m: &Material, used: &mut Vec<&'static str>) -> Value {
         v["extras"] = json!({ "lightlab": extras });
     }
     v
+}
+
+/// Three finite numbers as a vector.
+fn vec3_of(v: &Value) -> Option<Vec3> {
+    let a = v.as_array().filter(|a| a.len() == 3)?;
+    let x: Vec<f32> = a
+        .iter()
+        .filter_map(|x| x.as_f64())
+        .map(|x| x as f32)
+        .collect();
+    (x.len() == 3 && x.iter().all(|x| x.is_finite())).then(|| Vec3::new(x[0], x[1], x[2]))
 }
 
 /// `extras.lightlab.conductor` of a material: a preset name or `{"eta": [r,g,b], "k": [r,g,b]}`

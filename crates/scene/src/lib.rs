@@ -16,6 +16,7 @@ pub mod gltf_io;
 pub mod model;
 pub mod photometry;
 pub mod simplify;
+pub mod tangents;
 pub mod validate;
 
 pub use animation::{Animation, Track};

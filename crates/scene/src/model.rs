@@ -97,50 +97,11 @@ impl Mesh {
         self.normals = n.into_iter().map(|v| v.normalize_or(Vec3::Y)).collect();
     }
 
-    /// Compute tangents from UV0 (per-triangle UV gradients, accumulated and orthonormalised
-    /// against the normal; w = handedness). Vertices without a UV gradient get any orthogonal
-    /// tangent.
+    /// Compute MikkTSpace tangents from UV0 (glTF's rule for meshes without TANGENT), splitting
+    /// vertices whose corners get different tangent frames (UV seams, mirrored UVs). Without
+    /// UV0 every vertex gets some tangent orthogonal to its normal. See [`crate::tangents`].
     pub fn compute_tangents(&mut self) {
-        let nv = self.positions.len();
-        let mut t = vec![Vec3::ZERO; nv];
-        let mut b = vec![Vec3::ZERO; nv];
-        if self.uv0.len() == nv {
-            for tri in self.indices.chunks_exact(3) {
-                let [i0, i1, i2] = [tri[0], tri[1], tri[2]].map(|i| i as usize);
-                let (p0, p1, p2) = (self.positions[i0], self.positions[i1], self.positions[i2]);
-                let (w0, w1, w2) = (self.uv0[i0], self.uv0[i1], self.uv0[i2]);
-                let (e1, e2) = (p1 - p0, p2 - p0);
-                let (d1, d2) = (w1 - w0, w2 - w0);
-                let det = d1.x * d2.y - d2.x * d1.y;
-                if det.abs() < 1e-20 {
-                    continue;
-                }
-                let r = 1.0 / det;
-                let sdir = (e1 * d2.y - e2 * d1.y) * r;
-                let tdir = (e2 * d1.x - e1 * d2.x) * r;
-                for i in [i0, i1, i2] {
-                    t[i] += sdir;
-                    b[i] += tdir;
-                }
-            }
-        }
-        self.tangents = (0..nv)
-            .map(|i| {
-                let n = self.normals.get(i).copied().unwrap_or(Vec3::Y);
-                let tt = t[i] - n * n.dot(t[i]);
-                let tt = if tt.length_squared() > 1e-20 {
-                    tt.normalize()
-                } else {
-                    lightlab_core::sampling::orthonormal_basis(n).0
-                };
-                let w = if n.cross(tt).dot(b[i]) < 0.0 {
-                    -1.0
-                } else {
-                    1.0
-                };
-                tt.extend(w)
-            })
-            .collect();
+        crate::tangents::compute(self);
     }
 }
 
@@ -310,9 +271,20 @@ pub enum BrdfModel {
     TorranceSparrow,
     /// Cook–Torrance: the same with the V-groove masking of Eq 3.11.
     CookTorrance,
-    /// Ward's elliptical Gaussian, isotropic (α = roughness²): ρd/π + ρs·exp(−tan²δ/α²)/
-    /// (4πα²√(⟨n,l⟩⟨n,v⟩)).
+    /// Ward's elliptical Gaussian (α = roughness²): ρd/π + ρs·exp(−(h_t²/α_t² + h_b²/α_b²)/
+    /// h_n²)/(4πα_tα_b√(⟨n,l⟩⟨n,v⟩)), anisotropic with [`Material::anisotropy`] (α_t =
+    /// mix(α, 1, strength²) along the anisotropy direction, α_b = α, as KHR_materials_anisotropy
+    /// widens GGX).
     Ward,
+    /// Banks's fibre model (Heidrich §5.2, Eq 5.4 in the two-angle form): fibres along the
+    /// anisotropy direction t; ρd/π·√(1−⟨l,t⟩²) + ρs·N(n)·(√(1−⟨l,t⟩²)√(1−⟨v,t⟩²) −
+    /// ⟨l,t⟩⟨v,t⟩)ⁿ with the Phong exponent n of the roughness and N(n) the unit-albedo
+    /// normalisation of `lightlab_core::brdf::Banks::normalization`. Not reciprocal.
+    Banks,
+    /// Lafortune's generalised cosine lobe: ρd/π + ρs·(n+2)/(2π)·(C_x l_t v_t + C_y l_b v_b +
+    /// C_z l_n v_n)ⁿ in the tangent frame, C = [`Material::lafortune`] (default (−1, −1, 1):
+    /// Phong), n the Phong exponent of the roughness.
+    Lafortune,
 }
 
 lightlab_core::named_enum!(BrdfModel, "BRDF model", {
@@ -323,6 +295,8 @@ lightlab_core::named_enum!(BrdfModel, "BRDF model", {
     TorranceSparrow => "torrance-sparrow",
     CookTorrance => "cook-torrance",
     Ward => "ward",
+    Banks => "banks",
+    Lafortune => "lafortune",
 });
 
 impl BrdfModel {
@@ -332,6 +306,14 @@ impl BrdfModel {
         matches!(
             self,
             BrdfModel::Pbr | BrdfModel::TorranceSparrow | BrdfModel::CookTorrance | BrdfModel::Ward
+        )
+    }
+
+    /// Whether the model reads the tangent frame (the anisotropy direction).
+    pub fn uses_tangent(self) -> bool {
+        matches!(
+            self,
+            BrdfModel::Ward | BrdfModel::Banks | BrdfModel::Lafortune
         )
     }
 
@@ -396,6 +378,15 @@ pub struct Material {
     /// straight through, reflecting the sheet's Fresnel reflectance; above 0 the mesh bounds a
     /// solid whose surface refracts. Attenuation inside the volume is not modelled.
     pub thickness: f32,
+    /// KHR_materials_anisotropy `anisotropyStrength` in [0, 1]: widens the lobe along the
+    /// anisotropy direction (Ward: α_t = mix(α, 1, strength²)). The models that read it:
+    /// [`BrdfModel::uses_tangent`].
+    pub anisotropy: f32,
+    /// KHR_materials_anisotropy `anisotropyRotation` (radians): the anisotropy direction is the
+    /// tangent turned by this angle towards the bitangent.
+    pub anisotropy_rotation: f32,
+    /// The Lafortune lobe's (C_x, C_y, C_z) (glTF `extras.lightlab.lafortune`).
+    pub lafortune: Vec3,
 }
 
 /// A conductor's complex index of refraction η + ik, per RGB channel (relative to air).
@@ -507,6 +498,9 @@ impl Default for Material {
             ior: 1.5,
             conductor: None,
             thickness: 0.0,
+            anisotropy: 0.0,
+            anisotropy_rotation: 0.0,
+            lafortune: Vec3::new(-1.0, -1.0, 1.0),
         }
     }
 }

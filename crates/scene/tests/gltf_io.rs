@@ -45,6 +45,10 @@ fn assert_same_scene(a: &Scene, b: &Scene) {
         assert_eq!(x.brdf, y.brdf);
         assert_eq!(x.conductor, y.conductor);
         assert_eq!(
+            (x.anisotropy, x.anisotropy_rotation, x.lafortune),
+            (y.anisotropy, y.anisotropy_rotation, y.lafortune)
+        );
+        assert_eq!(
             (x.specular_transmission, x.ior, x.thickness),
             (y.specular_transmission, y.ior, y.thickness)
         );
@@ -120,17 +124,22 @@ fn every_builtin_scene_round_trips_through_glb_and_gltf() {
             assert_same_scene(&s, &back);
         }
     }
-    // The reflection model travels in extras.lightlab.brdf.
+    // The reflection model travels in extras.lightlab.brdf, the Lafortune lobe in
+    // extras.lightlab.lafortune, anisotropy in KHR_materials_anisotropy.
     let mut s = builtin::builtin("shadows").unwrap();
-    let models = [BrdfModel::Lambert, BrdfModel::Phong, BrdfModel::BlinnPhong];
+    let models = [BrdfModel::Lambert, BrdfModel::Banks, BrdfModel::Lafortune];
     for (m, b) in s.materials.iter_mut().zip(models) {
         m.brdf = b;
     }
+    s.materials[1].anisotropy = 0.6;
+    s.materials[1].anisotropy_rotation = 1.25;
+    s.materials[2].lafortune = Vec3::new(-1.1, -0.9, 0.8);
     let p = dir.path().join("brdf.gltf");
     gltf_io::export(&s, &p).unwrap();
     let back = gltf_io::import(&p, LoadOptions::default()).unwrap();
     let got: Vec<BrdfModel> = back.materials.iter().map(|m| m.brdf).collect();
     assert_eq!(got, models);
+    assert_same_scene(&s, &back);
     // No temporary files are left behind.
     for e in std::fs::read_dir(dir.path()).unwrap() {
         let n = e.unwrap().file_name().into_string().unwrap();
@@ -336,6 +345,51 @@ fn conductors_and_volumes_load_and_bad_ones_are_named() {
         let msg = load_err(&with(name, bad));
         assert!(
             msg.contains("conductor") && msg.contains(says),
+            "{name}: {msg}"
+        );
+    }
+}
+
+/// KHR_materials_anisotropy (required by the file) and extras.lightlab.lafortune load; a bad
+/// lobe is named.
+#[test]
+fn anisotropy_and_lafortune_lobes_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let with = |name: &str, lobe: serde_json::Value| {
+        triangle_file(dir.path(), name, GOOD, true, |j| {
+            j["materials"] = serde_json::json!([{
+                "name": "brushed",
+                "extras": { "lightlab": { "brdf": "lafortune", "lafortune": lobe } },
+                "extensions": {
+                    "KHR_materials_anisotropy": {
+                        "anisotropyStrength": 0.6,
+                        "anisotropyRotation": 0.5
+                    }
+                }
+            }]);
+            j["meshes"][0]["primitives"][0]["material"] = serde_json::json!(0);
+            j["extensionsUsed"] = serde_json::json!(["KHR_materials_anisotropy"]);
+            j["extensionsRequired"] = serde_json::json!(["KHR_materials_anisotropy"]);
+        })
+    };
+    let s = load(
+        with("good", serde_json::json!([-1.2, -0.8, 1.0]))
+            .to_str()
+            .unwrap(),
+        LoadOptions::default(),
+    )
+    .unwrap();
+    let m = &s.materials[0];
+    assert_eq!(m.brdf, BrdfModel::Lafortune);
+    assert_eq!((m.anisotropy, m.anisotropy_rotation), (0.6, 0.5));
+    assert_eq!(m.lafortune, Vec3::new(-1.2, -0.8, 1.0));
+    for (name, bad) in [
+        ("two", serde_json::json!([1, 2])),
+        ("text", serde_json::json!("phong")),
+    ] {
+        let msg = load_err(&with(name, bad));
+        assert!(
+            msg.contains("lafortune") && msg.contains("[Cx, Cy, Cz]"),
             "{name}: {msg}"
         );
     }

@@ -27,14 +27,20 @@
 //! - Other specular lobes (`Material::brdf`, Heidrich ch. 3): Phong and Blinn-Phong (the
 //!   normalised lobes of core, × F0); Torrance–Sparrow (Beckmann D with m = roughness²,
 //!   separable Smith G) and Cook–Torrance (Beckmann D, V-groove G), both with the material's
-//!   Fresnel like the GGX lobe; Ward's isotropic Gaussian (α = roughness², × F0).
+//!   Fresnel like the GGX lobe; Ward's elliptical Gaussian (α = roughness², widened along the
+//!   anisotropy direction to mix(α, 1, strength²), × F0); Banks's fibres along the anisotropy
+//!   direction (its diffuse term ρd/π·√(1−⟨l,t⟩²) replaces Lambert; specular × F0); Lafortune's
+//!   generalised cosine lobe (× F0). The local frame's x is the anisotropy direction
+//!   (`render::Surface::frame`).
 //! - Sampling: one lobe chosen by its estimated albedo; diffuse by cosine (flipped for
 //!   transmission), specular by the distribution of normals D(h)·cosθh. The returned pdf is the
 //!   one-sample mixture, as multiple importance sampling needs.
 
 use glam::{Vec2, Vec3, Vec4};
 use lightlab_core::brdf::Distribution;
-use lightlab_core::brdf::{BlinnPhong, Brdf, Masking, Phong, TorranceSparrow, Ward};
+use lightlab_core::brdf::{
+    Banks, BlinnPhong, Brdf, Lafortune, LafortuneLobe, Masking, Phong, TorranceSparrow, Ward,
+};
 use lightlab_core::color::luminance;
 use lightlab_core::sampling::cosine_hemisphere;
 use lightlab_scene::{BrdfModel, Material, Scene};
@@ -73,6 +79,10 @@ pub struct Bsdf {
     pub model: BrdfModel,
     /// Phong / Blinn-Phong exponent.
     pub exponent: f32,
+    /// KHR_materials_anisotropy strength (Ward's α along x = mix(α, 1, strength²)).
+    pub anisotropy: f32,
+    /// The Lafortune lobe's (C_x, C_y, C_z).
+    pub lafortune: Vec3,
     p_spec: f32,
 }
 
@@ -210,6 +220,8 @@ impl Bsdf {
             specular,
             model,
             exponent: BrdfModel::exponent(roughness),
+            anisotropy: material.anisotropy.clamp(0.0, 1.0),
+            lafortune: material.lafortune,
             p_spec,
         }
     }
@@ -234,15 +246,19 @@ impl Bsdf {
             specular: false,
             model: BrdfModel::Lambert,
             exponent: 1.0,
+            anisotropy: 0.0,
+            lafortune: Vec3::new(-1.0, -1.0, 1.0),
             p_spec: 0.0,
         }
     }
 
-    /// The classical lobes of [`BrdfModel::Phong`], [`BrdfModel::BlinnPhong`] and
-    /// [`BrdfModel::Ward`], from core
-    /// (normalised, unit reflectance; scaled by `f0` as the specular colour).
+    /// The classical lobes of [`BrdfModel::Phong`], [`BrdfModel::BlinnPhong`],
+    /// [`BrdfModel::Ward`], [`BrdfModel::Banks`] and [`BrdfModel::Lafortune`], from core
+    /// (normalised, unit reflectance; scaled by `f0` as the specular colour). Lafortune takes
+    /// Phong's Lewis normalisation (n+2)/(2π), Banks its own ([`Banks::normalization`]).
     fn classic<R>(&self, f: impl FnOnce(&dyn Brdf) -> R) -> Option<R> {
         let n = self.exponent as f64;
+        let lewis = (n + 2.0) / (2.0 * std::f64::consts::PI);
         match self.model {
             BrdfModel::Phong => Some(f(&Phong {
                 ks: 1.0,
@@ -254,11 +270,28 @@ impl Bsdf {
                 exponent: n,
                 normalized: true,
             })),
-            BrdfModel::Ward => Some(f(&Ward {
+            BrdfModel::Ward => {
+                let a = self.alpha as f64;
+                let s = self.anisotropy as f64;
+                Some(f(&Ward {
+                    kd: 0.0,
+                    ks: 1.0,
+                    alpha_x: a + (1.0 - a) * s * s,
+                    alpha_y: a,
+                }))
+            }
+            BrdfModel::Banks => Some(f(&Banks {
                 kd: 0.0,
-                ks: 1.0,
-                alpha_x: self.alpha as f64,
-                alpha_y: self.alpha as f64,
+                ks: Banks::normalization(n),
+                exponent: n,
+            })),
+            BrdfModel::Lafortune => Some(f(&Lafortune {
+                kd: 0.0,
+                lobes: vec![LafortuneLobe {
+                    ks: lewis,
+                    c: self.lafortune.as_dvec3(),
+                    exponent: n,
+                }],
             })),
             _ => None,
         }
@@ -372,6 +405,10 @@ impl Bsdf {
             return diffuse * self.transmission;
         }
         let mut f = diffuse * (1.0 - self.transmission);
+        if self.model == BrdfModel::Banks {
+            // Banks's diffuse term: ⟨n', l⟩ = √(1 − ⟨l,t⟩²), the normal in the plane of l and t.
+            f *= (1.0 - wi.x * wi.x).max(0.0).sqrt();
+        }
         if self.specular && wo.z > 0.0 {
             if let Some(c) = self.classic(|b| b.eval(wi.as_dvec3(), wo.as_dvec3())) {
                 return f + self.f0 * c as f32;
@@ -587,6 +624,32 @@ mod tests {
                 roughness: 0.5,
                 specular: 5.0,
                 brdf: BrdfModel::Ward,
+                ..Default::default()
+            },
+            Material {
+                name: "ward-anisotropic".into(),
+                base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
+                roughness: 0.4,
+                metallic: 1.0,
+                brdf: BrdfModel::Ward,
+                anisotropy: 0.7,
+                ..Default::default()
+            },
+            Material {
+                name: "banks".into(),
+                base_color: Vec4::new(0.3, 0.3, 0.6, 1.0),
+                roughness: 0.3,
+                specular: 5.0,
+                brdf: BrdfModel::Banks,
+                ..Default::default()
+            },
+            Material {
+                name: "lafortune".into(),
+                base_color: Vec4::new(0.6, 0.4, 0.3, 1.0),
+                roughness: 0.4,
+                specular: 5.0,
+                brdf: BrdfModel::Lafortune,
+                lafortune: Vec3::new(-1.0, -0.8, 0.95),
                 ..Default::default()
             },
         ];

@@ -152,6 +152,26 @@ pub struct Surface {
     /// Both texture-coordinate sets (each texture read picks its own).
     pub uv: Attrs,
     pub material: usize,
+    /// The anisotropy direction (unit, orthogonal to `ns`) for the models that read one
+    /// ([`lightlab_scene::BrdfModel::uses_tangent`]); zero otherwise.
+    pub tangent: Vec3,
+}
+
+impl Surface {
+    /// The local shading frame around `ns` (on the viewer's side): x along the anisotropy
+    /// direction where the material has one, else any.
+    pub fn frame(&self, ns: Vec3) -> Frame {
+        let t = self.tangent - ns * ns.dot(self.tangent);
+        if t.length_squared() < 1e-12 {
+            return Frame::from_normal(ns);
+        }
+        let t = t.normalize();
+        Frame {
+            t,
+            b: ns.cross(t),
+            n: ns,
+        }
+    }
 }
 
 /// Reconstruct the surface at a hit (`accel` built from `scene`).
@@ -177,13 +197,39 @@ pub fn surface(scene: &Scene, accel: &Accel, hit: &Hit) -> Surface {
     let uv = mesh.uv_at(idx, [b0, b1, b2]);
     let material = mesh.material;
     let ns = normal_mapped(scene, inst, mesh, idx, [b0, b1, b2], uv, ns, ng);
+    let m = &scene.materials[material];
+    let tangent = if m.brdf.uses_tangent() && mesh.tangents.len() == mesh.positions.len() {
+        let tg =
+            mesh.tangents[idx[0]] * b0 + mesh.tangents[idx[1]] * b1 + mesh.tangents[idx[2]] * b2;
+        anisotropy_direction(
+            Mat3::from_mat4(inst.transform) * tg.truncate(),
+            tg.w,
+            ns,
+            m.anisotropy_rotation,
+        )
+    } else {
+        Vec3::ZERO
+    };
     Surface {
         p,
         ng,
         ns,
         uv,
         material,
+        tangent,
     }
+}
+
+/// The anisotropy direction: the world tangent `tw` made orthogonal to `ns`, turned by
+/// `rotation` towards the bitangent (glTF: ns × t · handedness); zero where `tw` is degenerate.
+/// The GPU's `surface()` (raster.wgsl) computes the same.
+pub fn anisotropy_direction(tw: Vec3, handedness: f32, ns: Vec3, rotation: f32) -> Vec3 {
+    let t = (tw - ns * ns.dot(tw)).normalize_or_zero();
+    if t == Vec3::ZERO {
+        return t;
+    }
+    let b = ns.cross(t) * if handedness < 0.0 { -1.0 } else { 1.0 };
+    t * rotation.cos() + b * rotation.sin()
 }
 
 /// The shading normal perturbed by the material's tangent-space normal map (glTF: xy scaled by
@@ -355,6 +401,7 @@ impl<'a> PathTracer<'a> {
                     ns,
                     uv: Attrs::default(),
                     material: usize::MAX,
+                    tangent: Vec3::ZERO,
                 };
                 let wo_l = Vec3::Z;
                 depth += 1;
@@ -431,7 +478,7 @@ impl<'a> PathTracer<'a> {
             } else {
                 ng
             };
-            let frame = Frame::from_normal(ns);
+            let frame = sf.frame(ns);
             let wo_l = frame.to_local(wo);
             if wo_l.z <= 0.0 {
                 break;

@@ -119,7 +119,7 @@ impl GroupLayouts {
         let gbuffer = layout(
             device,
             "g-buffer",
-            &(0..4)
+            &(0..5)
                 .map(|b| texel_texture(b, Dim::D2))
                 .collect::<Vec<_>>(),
         );
@@ -150,21 +150,23 @@ pub(super) struct PipelineLayouts {
 
 impl PipelineLayouts {
     pub fn new(device: &wgpu::Device, g: &GroupLayouts) -> PipelineLayouts {
-        let pl = |label, groups: &[&wgpu::BindGroupLayout]| {
+        let pl = |label, groups: &[Option<&wgpu::BindGroupLayout>]| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(label),
-                bind_group_layouts: &groups.iter().map(|g| Some(*g)).collect::<Vec<_>>(),
+                bind_group_layouts: groups,
                 immediate_size: 0,
             })
         };
-        let (f, m, l) = (&g.frame, &g.material, &g.lighting);
+        let (f, m, l) = (Some(&g.frame), Some(&g.material), Some(&g.lighting));
         PipelineLayouts {
             scene: pl("scene", &[f, m, l]),
-            deferred: pl("deferred", &[f, m, l, &g.gbuffer]),
+            // No material group: the G-buffer holds the material, and the GL backend allows 16
+            // sampled textures per stage, which the material's five would overrun.
+            deferred: pl("deferred", &[f, None, l, Some(&g.gbuffer)]),
             shadow: pl("shadow", &[f, m]),
             frame: pl("frame only", &[f]),
-            tonemap: pl("tonemap", &[f, m, l, &g.tonemap]),
-            sky: pl("sky", &[f, m, l, &g.sky]),
+            tonemap: pl("tonemap", &[f, m, l, Some(&g.tonemap)]),
+            sky: pl("sky", &[f, m, l, Some(&g.sky)]),
         }
     }
 }

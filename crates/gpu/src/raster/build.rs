@@ -269,6 +269,7 @@ fn groups(
                 entry(1, R::TextureView(&g[1])),
                 entry(2, R::TextureView(&g[2])),
                 entry(3, R::TextureView(&g[3])),
+                entry(4, R::TextureView(&g[4])),
             ],
         ),
         tonemap: group(

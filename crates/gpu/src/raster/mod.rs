@@ -386,7 +386,7 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.pipelines.tonemap);
+            pass.set_pipeline(self.pipelines.tonemap.get());
             pass.set_bind_group(0, &self.group0, &[0]);
             pass.set_bind_group(1, &self.scene.materials[0].bind_group, &[]);
             pass.set_bind_group(2, &self.group2, &[]);

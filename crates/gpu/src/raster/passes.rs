@@ -129,7 +129,7 @@ impl Renderer {
     pub(super) fn draw_scene<'a>(
         &'a self,
         pass: &mut wgpu::RenderPass<'a>,
-        pipes: &'a [wgpu::RenderPipeline; 2],
+        pipes: &'a [super::pipelines::Lazy; 2],
         li: Option<usize>,
     ) {
         pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
@@ -141,7 +141,7 @@ impl Renderer {
             }
             let m = &self.scene.materials[d.material];
             if current != Some(m.double_sided) {
-                pass.set_pipeline(&pipes[m.double_sided as usize]);
+                pass.set_pipeline(pipes[m.double_sided as usize].get());
                 current = Some(m.double_sided);
             }
             pass.set_bind_group(1, &m.bind_group, &[]);
@@ -223,9 +223,9 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_pipeline(if linear {
-                &self.pipelines.shadow_linear
+                self.pipelines.shadow_linear.get()
             } else {
-                &self.pipelines.shadow_depth
+                self.pipelines.shadow_depth.get()
             });
             pass.set_bind_group(0, &self.group0, &[((n + v) as u64 * SLOT) as u32]);
             pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
@@ -256,9 +256,9 @@ impl Renderer {
                     return;
                 }
                 pass.set_pipeline(if self.settings.shadows == ShadowMethod::VolumesZFail {
-                    &self.pipelines.zfail[m]
+                    self.pipelines.zfail[m].get()
                 } else {
-                    &self.pipelines.zpass[m]
+                    self.pipelines.zpass[m].get()
                 });
                 pass.set_stencil_reference(0);
                 pass.set_vertex_buffer(0, self.volume_buf.as_ref().expect("built").slice(..));
@@ -268,7 +268,7 @@ impl Renderer {
                 if self.planar[li].is_none() {
                     return;
                 }
-                pass.set_pipeline(&self.pipelines.planar[m]);
+                pass.set_pipeline(self.pipelines.planar[m].get());
                 pass.set_stencil_reference(1);
                 pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
                 pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
@@ -397,7 +397,7 @@ impl Renderer {
         if let Some((x, y, w, h)) = self.clip_rect {
             pass.set_scissor_rect(x, y, w, h);
         }
-        pass.set_pipeline(&self.pipelines.sky);
+        pass.set_pipeline(self.pipelines.sky.get());
         pass.set_bind_group(0, &self.group0, &[0]);
         pass.set_bind_group(1, &self.scene.materials[0].bind_group, &[]);
         pass.set_bind_group(2, &self.group2, &[]);
@@ -448,8 +448,7 @@ impl Renderer {
             pass.set_bind_group(0, &self.group0, &slot);
             pass.set_bind_group(2, &self.group2, &[]);
             if deferred {
-                pass.set_pipeline(&self.pipelines.deferred_light);
-                pass.set_bind_group(1, &self.scene.materials[0].bind_group, &[]);
+                pass.set_pipeline(self.pipelines.deferred_light.get());
                 pass.set_bind_group(3, &self.group3, &[]);
                 pass.draw(0..3, 0..1);
             } else {

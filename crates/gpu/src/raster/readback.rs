@@ -96,13 +96,12 @@ impl Renderer {
                 });
                 pass.set_bind_group(0, &self.group0, &[(li as u64 * SLOT) as u32]);
                 if map {
-                    pass.set_pipeline(&self.pipelines.map_mask);
-                    pass.set_bind_group(1, &self.scene.materials[0].bind_group, &[]);
+                    pass.set_pipeline(self.pipelines.map_mask.get());
                     pass.set_bind_group(2, &self.group2, &[]);
                     pass.set_bind_group(3, &self.group3, &[]);
                 } else {
                     self.stencil_marks(&mut pass, li, true);
-                    pass.set_pipeline(&self.pipelines.mask);
+                    pass.set_pipeline(self.pipelines.mask.get());
                     pass.set_stencil_reference(0);
                 }
                 pass.draw(0..3, 0..1);

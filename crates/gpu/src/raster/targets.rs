@@ -10,15 +10,17 @@ pub(super) const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub(super) const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
 pub(super) const SHADOW_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 pub(super) const MASK: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
-/// G-buffer formats: diffuse + dielectric F0, normal + roughness, F0 + model, and the
-/// camera-relative position (32-bit float where renderable, else 16-bit: GLES).
-pub(super) fn gbuffer_formats(ctx: &GpuContext) -> [wgpu::TextureFormat; 4] {
+/// G-buffer formats: diffuse + dielectric F0, normal + roughness, F0 + model, the
+/// camera-relative position (32-bit float where renderable, else 16-bit: GLES), and the
+/// anisotropic lobes' tangent angle and parameters.
+pub(super) fn gbuffer_formats(ctx: &GpuContext) -> [wgpu::TextureFormat; 5] {
     let f16 = wgpu::TextureFormat::Rgba16Float;
     [
         f16,
         f16,
         f16,
         renderable_or(ctx, wgpu::TextureFormat::Rgba32Float, f16),
+        f16,
     ]
 }
 

@@ -135,7 +135,8 @@ struct GpuMaterial {
     // < 0: opaque; otherwise alpha-test threshold.
     alpha_cutoff: f32,
     transmission: f32,
-    // 0 pbr, 1 lambert, 2 phong, 3 blinn-phong.
+    // 0 pbr, 1 lambert, 2 phong, 3 blinn-phong, 4 torrance-sparrow, 5 cook-torrance, 6 ward,
+    // 7 banks, 8 lafortune (gpu_scene::gpu_material).
     model: u32,
     // bit 0 base colour, 1 metallic-roughness, 2 normal, 3 emissive texture; bit 4 double-sided;
     // bit 5 translucency map.
@@ -157,6 +158,10 @@ struct GpuMaterial {
     // present (the metallic part's Fresnel is then exact instead of Schlick's).
     conductor_eta: vec4<f32>,
     conductor_k: vec4<f32>,
+    // KHR_materials_anisotropy: (strength, cos rotation, sin rotation, 0).
+    anisotropy: vec4<f32>,
+    // The Lafortune lobe's (C_x, C_y, C_z, 0).
+    lafortune: vec4<f32>,
 }
 
 // The wind displacement of a world-space vertex (lightlab_core::wind::Wind::sway): `a` =
@@ -202,6 +207,68 @@ struct Surface {
     metal: vec3<f32>,
     eta: vec3<f32>,
     k: vec3<f32>,
+    // The anisotropy direction (unit, orthogonal to n; zero where the model reads none) and
+    // the model's lobe parameters: Ward (strength, 0, 0), Lafortune (C_x, C_y, C_z).
+    t: vec3<f32>,
+    lobe: vec3<f32>,
+}
+
+// Whether the model reads the tangent frame (ward, banks, lafortune: BrdfModel::uses_tangent).
+fn uses_tangent(model: u32) -> bool {
+    return model >= 6u && model <= 8u;
+}
+
+// W(m) = ∫₀^{π/2} sinᵐ (lightlab_core::brdf::wallis): the gamma ratio's asymptotic series once
+// x = m/2 ≥ 32, reached by its recurrence.
+fn wallis(m: f32) -> f32 {
+    var x = m * 0.5;
+    var scale = 1.0;
+    for (var i = 0; i < 64 && x < 32.0; i++) {
+        scale *= (x + 1.0) / (x + 0.5);
+        x += 1.0;
+    }
+    let y = 1.0 / x;
+    let series = 1.0 - y / 8.0 + y * y / 128.0 + 5.0 * y * y * y / 1024.0;
+    return 0.5 * sqrt(PI) * scale * series / sqrt(x);
+}
+
+// Banks's lobe normalisation 1/(4·W(n+2)) (lightlab_core::brdf::Banks::normalization).
+fn banks_normalization(e: f32) -> f32 {
+    return 1.0 / (4.0 * wallis(e + 2.0));
+}
+
+// The anisotropic lobes (ward, banks, lafortune) of brdf_cos, without the cosine; `b` the
+// bitangent n × t.
+fn tangent_lobe(s: Surface, v: vec3<f32>, l: vec3<f32>, nv: f32, nl: f32) -> vec3<f32> {
+    let b = cross(s.n, s.t);
+    if s.model == 6u {
+        // Ward's elliptical Gaussian: α_t = mix(α, 1, strength²) along t, α_b = α, × F0.
+        let a = max(s.roughness * s.roughness, 1e-3);
+        let h = normalize(v + l);
+        let hn = max(dot(s.n, h), 1e-6);
+        // Isotropic where the surface has no tangent.
+        var ax = a;
+        var e = (1.0 - hn * hn) / (a * a);
+        if dot(s.t, s.t) > 0.5 {
+            ax = a + (1.0 - a) * s.lobe.x * s.lobe.x;
+            let ht = dot(h, s.t) / ax;
+            let hb = dot(h, b) / a;
+            e = ht * ht + hb * hb;
+        }
+        return s.f0 * (exp(-e / (hn * hn)) / (4.0 * PI * ax * a * sqrt(nl * nv)));
+    }
+    let e = phong_exponent(s.roughness);
+    if s.model == 7u {
+        // Banks: the specular term of the fibre (the diffuse one is in brdf_cos).
+        let a = dot(l, s.t);
+        let c = dot(v, s.t);
+        let d = sqrt(max(1.0 - a * a, 0.0)) * sqrt(max(1.0 - c * c, 0.0)) - a * c;
+        return s.f0 * (banks_normalization(e) * pow(max(d, 0.0), e));
+    }
+    // Lafortune's generalised cosine lobe, Lewis-normalised.
+    let d = s.lobe.x * dot(l, s.t) * dot(v, s.t) + s.lobe.y * dot(l, b) * dot(v, b)
+        + s.lobe.z * nl * nv;
+    return s.f0 * ((e + 2.0) / (2.0 * PI) * pow(max(d, 0.0), e));
 }
 
 fn sh9(n: vec3<f32>) -> array<f32, 9> {
@@ -278,6 +345,11 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
         return vec3<f32>(0.0);
     }
     var f = diffuse_coef(s, nv);
+    if s.model == 7u {
+        // Banks's diffuse term: ⟨n', l⟩ = √(1 − ⟨l,t⟩²).
+        let a = dot(l, s.t);
+        f *= sqrt(max(1.0 - a * a, 0.0));
+    }
     if s.model == 1u || all(s.f0 <= vec3<f32>(0.0)) {
         return f * nl;
     }
@@ -312,13 +384,8 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
             g = clamp(min(2.0 * nh * nv / vh, 2.0 * nh * nl / vh), 0.0, 1.0);
         }
         f += surface_fresnel(s, dot(v, h)) * (d * g / (4.0 * nv * nl));
-    } else if s.model == 6u {
-        // Ward's isotropic Gaussian, α = roughness², × F0 (lightlab_core::brdf::Ward).
-        let h = normalize(v + l);
-        let a = max(s.roughness * s.roughness, 1e-3);
-        let nh = max(dot(s.n, h), 1e-6);
-        let tan2 = (1.0 - nh * nh) / (nh * nh);
-        f += s.f0 * (exp(-tan2 / (a * a)) / (4.0 * PI * a * a * sqrt(nl * nv)));
+    } else if uses_tangent(s.model) {
+        f += tangent_lobe(s, v, l, nv, nl);
     } else if s.model == 2u {
         let e = phong_exponent(s.roughness);
         let r = 2.0 * nv * s.n - v;

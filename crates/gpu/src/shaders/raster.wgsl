@@ -23,6 +23,7 @@
 @group(3) @binding(1) var gb_normal: texture_2d<f32>;
 @group(3) @binding(2) var gb_specular: texture_2d<f32>;
 @group(3) @binding(3) var gb_position: texture_2d<f32>;
+@group(3) @binding(4) var gb_lobe: texture_2d<f32>;
 
 struct VertexOut {
     @invariant @builtin(position) clip: vec4<f32>,
@@ -141,6 +142,19 @@ fn surface(in: VertexOut, front: bool) -> Surface {
     s.roughness = roughness;
     s.model = material.model;
     s.transmission = material_transmission(in.uv0, in.uv1);
+    s.t = vec3<f32>(0.0);
+    s.lobe = select(vec3<f32>(material.anisotropy.x, 0.0, 0.0), material.lafortune.xyz, s.model == 8u);
+    if uses_tangent(s.model) {
+        // The anisotropy direction (trace::render::anisotropy_direction): the tangent made
+        // orthogonal to n, turned towards the bitangent (of the authored front side's normal).
+        var tg = in.tangent.xyz - n * dot(in.tangent.xyz, n);
+        if dot(tg, tg) > 1e-12 {
+            tg = normalize(tg);
+            let nf = select(-n, n, front);
+            let bt = cross(nf, tg) * select(1.0, -1.0, in.tangent.w < 0.0);
+            s.t = tg * material.anisotropy.y + bt * material.anisotropy.z;
+        }
+    }
     return s;
 }
 
@@ -403,6 +417,37 @@ struct GBufferOut {
     @location(2) normal: vec4<f32>,
     @location(3) specular: vec4<f32>,
     @location(4) position: vec4<f32>,
+    @location(5) lobe: vec4<f32>,
+}
+
+// The G-buffer's anisotropy direction: its angle φ around n from tangent_basis(n), which the
+// deferred pass recomputes from the stored (16-bit) normal; 100 where there is none.
+fn tangent_basis(n: vec3<f32>) -> mat2x3<f32> {
+    // Duff et al. 2017 (lightlab_core::sampling::orthonormal_basis). The branch follows the
+    // sign of n.z, which 16-bit rounding keeps.
+    let sg = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sg + n.z);
+    let b = n.x * n.y * a;
+    return mat2x3<f32>(
+        vec3<f32>(1.0 + sg * n.x * n.x * a, sg * b, -sg * n.x),
+        vec3<f32>(b, sg + n.y * n.y * a, -n.y),
+    );
+}
+
+fn encode_tangent(n: vec3<f32>, t: vec3<f32>) -> f32 {
+    if dot(t, t) < 0.5 {
+        return 100.0;
+    }
+    let m = tangent_basis(n);
+    return atan2(dot(t, m[1]), dot(t, m[0]));
+}
+
+fn decode_tangent(n: vec3<f32>, phi: f32) -> vec3<f32> {
+    if phi > 50.0 {
+        return vec3<f32>(0.0);
+    }
+    let m = tangent_basis(n);
+    return normalize(m[0] * cos(phi) + m[1] * sin(phi));
 }
 
 @fragment
@@ -416,6 +461,7 @@ fn gbuffer_fs(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     o.specular = vec4<f32>(s.f0, f32(s.model) + min(s.transmission, 0.99));
     // Camera-relative: keeps precision near the viewer when the target is 16-bit (GLES).
     o.position = vec4<f32>(s.p - frame.camera_pos, 1.0 + s.delta);
+    o.lobe = vec4<f32>(encode_tangent(s.n, s.t), s.lobe);
     // The geometric normal is not stored: the deferred path uses the shading normal for the
     // horizon test (documented deviation; the forward path is the exact one).
     return o;
@@ -452,6 +498,9 @@ fn gbuffer_surface(c: vec2<i32>) -> Surface {
     s.ior = 1.5;
     s.tint = vec3<f32>(1.0);
     s.conductor = 0u;
+    let lobe = textureLoad(gb_lobe, c, 0);
+    s.t = decode_tangent(s.n, lobe.x);
+    s.lobe = lobe.yzw;
     return s;
 }
 
