@@ -24,7 +24,8 @@ fn scenes_lists_one_name_per_line() {
             "prt-dynamic",
             "luminaire",
             "mirror",
-            "glass"
+            "glass",
+            "brdfs"
         ]
     );
 }
@@ -487,7 +488,7 @@ fn bench_trace_reports_json() {
 // them side by side (a demo run is mostly one thread: lavapipe compiles shaders on one).
 #[test]
 fn demo_preview_writes_a_report_for_the_first_scenes() {
-    demo_preview(&["cornell", "shadows", "prt", "spheres", "glass"]);
+    demo_preview(&["cornell", "shadows", "prt", "spheres", "glass", "brdfs"]);
 }
 
 #[test]
@@ -512,6 +513,7 @@ fn the_demo_tests_cover_every_built_in_scene() {
         "prt",
         "spheres",
         "glass",
+        "brdfs",
         "room",
         "bush",
         "atrium",

@@ -177,6 +177,34 @@ fn builtin_scenes_have_cameras_and_the_specified_sizes() {
     assert!(prt.materials.iter().any(|m| m.normal_texture.is_some()));
     let cornell = builtin::builtin("cornell").unwrap();
     assert!(cornell.materials.iter().any(|m| m.is_emissive()));
+    // brdfs: the Fig 5.2 torus at 200 × 200, and the Fig 5.3 tangent fields as authored
+    // (circular: round the centre; radial: away from it), orthogonal to the normals.
+    let brdfs = builtin::builtin("brdfs").unwrap();
+    assert_eq!(brdfs.triangle_count(), 174_592);
+    let torus = brdfs
+        .meshes
+        .iter()
+        .find(|m| m.name == "torus_ts_0.4")
+        .unwrap();
+    assert_eq!(torus.triangle_count(), 80_000);
+    for (name, radial) in [("disk_banks_circular", false), ("disk_banks_radial", true)] {
+        let d = brdfs.meshes.iter().find(|m| m.name == name).unwrap();
+        for (p, t) in d
+            .positions
+            .iter()
+            .zip(&d.tangents)
+            .filter(|(p, _)| p.length() > 0.01)
+        {
+            let along = t.truncate().dot(p.normalize()).abs();
+            assert!(
+                if radial { along > 0.999 } else { along < 1e-3 },
+                "{name}: {t} at {p}"
+            );
+        }
+        for (n, t) in d.normals.iter().zip(&d.tangents) {
+            assert!(n.dot(t.truncate()).abs() < 1e-5);
+        }
+    }
 }
 
 /// Every triangle of a closed mesh shares each of its edges with exactly one other triangle

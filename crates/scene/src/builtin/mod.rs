@@ -12,6 +12,7 @@
 //! | `prt-dynamic` | three objects moving near each other over a tiled ground (animated) |
 //! | `luminaire` | a small room lit by measured lamps (goniometric: batwing, wall washer, flood) |
 
+pub mod brdfs;
 mod dynamic;
 pub mod geom;
 pub mod glass;
@@ -25,7 +26,7 @@ use lightlab_core::image::Image;
 use lightlab_core::sampling::{Rng, uniform_sphere};
 
 /// Names of the built-in scenes, in the order `lightlab scenes` lists them.
-pub const NAMES: [&str; 11] = [
+pub const NAMES: [&str; 12] = [
     "cornell",
     "room",
     "shadows",
@@ -37,6 +38,7 @@ pub const NAMES: [&str; 11] = [
     "luminaire",
     "mirror",
     "glass",
+    "brdfs",
 ];
 
 /// One-line description of a built-in scene.
@@ -57,6 +59,9 @@ pub fn describe(name: &str) -> Option<&'static str> {
         "luminaire" => "small room lit by measured lamps: batwing downlight, wall washer, flood",
         "mirror" => "a wall mirror beside a ball, a box and a pillar: planar reflections",
         "glass" => "a solid glass torus in a striped studio environment: refraction",
+        "brdfs" => {
+            "Heidrich's Figs 5.2 and 5.3: Torrance–Sparrow tori, Ward and Banks disks and spheres"
+        }
         _ => return None,
     })
 }
@@ -75,6 +80,7 @@ pub fn builtin(name: &str) -> Option<Scene> {
         "luminaire" => luminaire::luminaire(),
         "mirror" => mirror::mirror(),
         "glass" => glass::glass(),
+        "brdfs" => brdfs::brdfs(),
         _ => return None,
     };
     s.name = name.into();
