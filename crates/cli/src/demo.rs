@@ -18,14 +18,15 @@ use std::time::Instant;
 pub enum Quality {
     /// Tiny images in seconds: a smoke run of the whole pipeline.
     Preview,
-    /// The default: about six and a half minutes on two cores.
+    /// The default: about twenty minutes on two cores (lavapipe for the GPU techniques).
     Low,
     /// Larger, cleaner images.
     High,
 }
 
-/// Image size and samples per scene at each quality. `low` is sized for about six and a half
-/// minutes on a 2-core machine in total.
+/// Image size and samples per scene at each quality. `low` takes about twenty minutes on a
+/// 2-core machine in total (20.6 min on 2026-12-03, of which the `luminaire` reference, traced
+/// through its lamps' windows, is 4 min).
 fn settings_for(scene: &str, q: Quality) -> RenderSettings {
     let (w, h, spp) = match (scene, q) {
         (_, Quality::Preview) => (48, 48, 4),

@@ -50,7 +50,7 @@ enum Command {
         /// Output folder (created if missing).
         #[arg(long, default_value = "demo-out")]
         out: PathBuf,
-        /// `low` finishes in about six and a half minutes on two cores; `high` renders larger,
+        /// `low` finishes in about twenty minutes on two cores; `high` renders larger,
         /// cleaner images.
         #[arg(long, value_enum, default_value_t = demo::Quality::Low)]
         quality: demo::Quality,
