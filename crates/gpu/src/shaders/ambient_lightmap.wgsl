@@ -50,13 +50,7 @@ fn lightmap_read(uv1: vec2<f32>, extra: u32) -> vec3<f32> {
 
 // The tangent frame of directional light-maps (lightlab_bake::gather::directional_frame).
 fn directional_frame(n: vec3<f32>) -> mat2x3<f32> {
-    let sign = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    return mat2x3<f32>(
-        vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        vec3<f32>(b, sign + n.y * n.y * a, -n.y),
-    );
+    return orthonormal_basis(n);
 }
 
 // Weights of the three basis directions (Half-Life 2's radiosity normal mapping basis) for a

@@ -213,6 +213,18 @@ struct Surface {
     lobe: vec3<f32>,
 }
 
+// Two unit vectors completing n to an orthonormal frame (Duff et al. 2017; the same as
+// lightlab_core::sampling::orthonormal_basis).
+fn orthonormal_basis(n: vec3<f32>) -> mat2x3<f32> {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return mat2x3<f32>(
+        vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        vec3<f32>(b, sign + n.y * n.y * a, -n.y),
+    );
+}
+
 // Whether the model reads the tangent frame (ward, banks, lafortune: BrdfModel::uses_tangent).
 fn uses_tangent(model: u32) -> bool {
     return model >= 6u && model <= 8u;

@@ -422,16 +422,9 @@ struct GBufferOut {
 
 // The G-buffer's anisotropy direction: its angle φ around n from tangent_basis(n), which the
 // deferred pass recomputes from the stored (16-bit) normal; 100 where there is none.
+// orthonormal_basis branches on the sign of n.z, which 16-bit rounding keeps.
 fn tangent_basis(n: vec3<f32>) -> mat2x3<f32> {
-    // Duff et al. 2017 (lightlab_core::sampling::orthonormal_basis). The branch follows the
-    // sign of n.z, which 16-bit rounding keeps.
-    let sg = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (sg + n.z);
-    let b = n.x * n.y * a;
-    return mat2x3<f32>(
-        vec3<f32>(1.0 + sg * n.x * n.x * a, sg * b, -sg * n.x),
-        vec3<f32>(b, sg + n.y * n.y * a, -n.y),
-    );
+    return orthonormal_basis(n);
 }
 
 fn encode_tangent(n: vec3<f32>, t: vec3<f32>) -> f32 {
