@@ -121,6 +121,14 @@ pub enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Normal-map filters on bumps smaller than a pixel: error against a supersampled render
+    /// and shimmer under a sub-pixel camera turn, per reflection model and roughness.
+    NormalFilter {
+        #[command(flatten)]
+        normals: crate::bench_normals::NormalFilterBenchArgs,
+        #[arg(long)]
+        json: bool,
+    },
     /// Milliseconds per pass of a GPU technique (GPU timestamps where the adapter has them).
     Frame {
         #[arg(long)]
@@ -182,6 +190,7 @@ pub fn run(cmd: BenchCommand) -> Result<()> {
             load,
             json,
         } => crate::bench_refraction::run((&scene, &load), &field, &refraction, json),
+        BenchCommand::NormalFilter { normals, json } => crate::bench_normals::run(&normals, json),
         BenchCommand::Frame {
             scene,
             technique,

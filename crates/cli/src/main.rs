@@ -13,6 +13,7 @@ mod bake_cmd;
 mod bench;
 mod bench_canned;
 mod bench_hprt;
+mod bench_normals;
 mod bench_refraction;
 mod check;
 mod demo;

@@ -14,8 +14,8 @@ use lightlab_gpu::lights::Attenuation;
 use lightlab_gpu::lpv::{LpvScheme, LpvSettings};
 use lightlab_gpu::prt::ShFilter;
 use lightlab_gpu::raster::{
-    Ambient, EnvDiffuse, EnvMapKind, EnvPrefilter, RasterSettings, Refraction, RenderPath,
-    ShadowMethod,
+    Ambient, EnvDiffuse, EnvMapKind, EnvPrefilter, NormalFilter, RasterSettings, Refraction,
+    RenderPath, ShadowMethod,
 };
 use lightlab_scene::{BrdfModel, Scene};
 use std::path::PathBuf;
@@ -524,6 +524,13 @@ pub struct RasterArgs {
     /// the scene per mirror); off leaves them reflecting the environment map.
     #[arg(long, default_value = "on", value_parser = ["on", "off"])]
     pub planar_mirrors: String,
+    /// How normal maps are filtered where their texels are smaller than a pixel (Heidrich
+    /// §9.1.1): variance (Toksvig: the normals' spread under each mip texel widens the
+    /// reflection lobe, so distant bumps turn into the gloss they make), box (box-mipped
+    /// normals: distant bumps shine like a flat surface and shimmer) or none (the finest level
+    /// only: aliases; exact when supersampled).
+    #[arg(long, default_value = "variance")]
+    pub normal_filter: NormalFilter,
 }
 
 impl Default for RasterArgs {
@@ -553,6 +560,7 @@ impl Default for RasterArgs {
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
             planar_mirrors: "on".into(),
+            normal_filter: NormalFilter::Variance,
         }
     }
 }
@@ -605,6 +613,7 @@ impl RasterArgs {
             refraction: self.refraction,
             env_texels: self.env_texels,
             planar_mirrors: self.planar_mirrors == "on",
+            normal_filter: self.normal_filter,
             ..Default::default()
         })
     }

@@ -134,31 +134,79 @@ fn mip_chain(t: &Texture) -> Vec<(u32, u32, Vec<half::f16>)> {
         if w == 1 && h == 1 {
             break;
         }
-        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
-        let mut next = vec![Vec4::ZERO; (nw * nh) as usize];
-        for y in 0..nh {
-            for x in 0..nw {
-                let mut s = Vec4::ZERO;
-                let mut n = 0.0;
-                for dy in 0..2 {
-                    for dx in 0..2 {
-                        let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
-                        s += cur[(sy * w + sx) as usize];
-                        n += 1.0;
-                    }
-                }
-                next[(y * nw + x) as usize] = s / n;
-            }
-        }
-        cur = next;
-        w = nw;
-        h = nh;
+        (cur, w, h) = box_down(&cur, w, h);
     }
     levels
 }
 
+/// The mip chain of a tangent-space normal map for every `raster::NormalFilter`: RGB the box
+/// mean of the finest level's unit normals (xyz·½ + ½, unnormalised, so box-mipped normals are
+/// today's), alpha the spread of those normals under the texel as Toksvig's σ² = (1 − r)/r, r
+/// the length of their mean. The finest level's normals are renormalised first (an 8-bit map's
+/// are not unit, and would read as spread), so its σ² is 0 and magnified maps are not widened.
+/// The means are kept in f32 between levels; only the stored texels are f16.
+fn normal_mip_chain(t: &Texture) -> Vec<(u32, u32, Vec<half::f16>)> {
+    let mut levels = vec![];
+    let (mut w, mut h) = (t.width.max(1), t.height.max(1));
+    let mut cur: Vec<Vec3> = t
+        .to_linear()
+        .iter()
+        .map(|c| (c.truncate() * 2.0 - Vec3::ONE).normalize_or(Vec3::Z))
+        .collect();
+    loop {
+        let texel = |m: &Vec3| {
+            let r = m.length().max(1e-3);
+            let spread = ((1.0 - r) / r).clamp(0.0, 16.0);
+            (*m * 0.5 + Vec3::splat(0.5)).extend(spread).to_array()
+        };
+        levels.push((
+            w,
+            h,
+            cur.iter()
+                .flat_map(|m| texel(m).map(half::f16::from_f32))
+                .collect(),
+        ));
+        if w == 1 && h == 1 {
+            break;
+        }
+        (cur, w, h) = box_down(&cur, w, h);
+    }
+    levels
+}
+
+/// One 2 × 2 box-filtered level down (edges clamped for odd sizes).
+fn box_down<T>(cur: &[T], w: u32, h: u32) -> (Vec<T>, u32, u32)
+where
+    T: Copy + Default + std::ops::Add<Output = T> + std::ops::Div<f32, Output = T>,
+{
+    let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+    let mut next = vec![T::default(); (nw * nh) as usize];
+    for y in 0..nh {
+        for x in 0..nw {
+            let mut s = T::default();
+            for dy in 0..2 {
+                for dx in 0..2 {
+                    let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
+                    s = s + cur[(sy * w + sx) as usize];
+                }
+            }
+            next[(y * nw + x) as usize] = s / 4.0;
+        }
+    }
+    (next, nw, nh)
+}
+
 fn upload_texture(device: &wgpu::Device, queue: &wgpu::Queue, t: &Texture) -> wgpu::TextureView {
-    let levels = mip_chain(t);
+    upload_levels(device, queue, t, mip_chain(t))
+}
+
+/// A mip chain (RGBA f16 levels) as a sampled texture.
+fn upload_levels(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    t: &Texture,
+    levels: Vec<(u32, u32, Vec<half::f16>)>,
+) -> wgpu::TextureView {
     let tex = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(&t.name),
         size: wgpu::Extent3d {
@@ -413,11 +461,37 @@ fn upload_materials(
             srgb: false,
         },
     );
-    let textures: Vec<wgpu::TextureView> = scene
+    // A texture read as a normal map gets its own chain (with the spread in alpha); one read
+    // otherwise too is uploaded twice.
+    let as_normal = |i: usize| {
+        scene
+            .materials
+            .iter()
+            .any(|m| m.normal_texture.is_some_and(|r| r.texture == i))
+    };
+    let as_other = |i: usize| {
+        scene.materials.iter().any(|m| {
+            [
+                m.base_color_texture,
+                m.metallic_roughness_texture,
+                m.emissive_texture,
+                m.transmission_texture,
+            ]
+            .iter()
+            .any(|r| r.is_some_and(|r| r.texture == i))
+        })
+    };
+    let (textures, normals): (Vec<_>, Vec<_>) = scene
         .textures
         .iter()
-        .map(|t| upload_texture(device, queue, t))
-        .collect();
+        .enumerate()
+        .map(|(i, t)| {
+            (
+                as_other(i).then(|| upload_texture(device, queue, t)),
+                as_normal(i).then(|| upload_levels(device, queue, t, normal_mip_chain(t))),
+            )
+        })
+        .unzip();
     let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some("material"),
         address_mode_u: wgpu::AddressMode::Repeat,
@@ -439,6 +513,7 @@ fn upload_materials(
         layout: &layout,
         white: &white,
         textures: &textures,
+        normals: &normals,
         sampler: &sampler,
     };
     list.iter()
@@ -450,7 +525,10 @@ fn upload_materials(
 struct MaterialTextures<'a> {
     layout: &'a wgpu::BindGroupLayout,
     white: &'a wgpu::TextureView,
-    textures: &'a [wgpu::TextureView],
+    /// Each texture as colour (or data), where a material reads it so.
+    textures: &'a [Option<wgpu::TextureView>],
+    /// Each texture as a normal map, where a material reads it so.
+    normals: &'a [Option<wgpu::TextureView>],
     sampler: &'a wgpu::Sampler,
 }
 
@@ -547,8 +625,10 @@ fn material_binding(
         usage: wgpu::BufferUsages::UNIFORM,
     });
     let view = |r: Option<lightlab_scene::TextureRef>| {
-        wgpu::BindingResource::TextureView(r.map_or(t.white, |r| &t.textures[r.texture]))
+        let v = r.and_then(|r| t.textures[r.texture].as_ref());
+        wgpu::BindingResource::TextureView(v.unwrap_or(t.white))
     };
+    let normal = m.normal_texture.and_then(|r| t.normals[r.texture].as_ref());
     let e = |binding, resource| wgpu::BindGroupEntry { binding, resource };
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(&m.name),
@@ -557,7 +637,10 @@ fn material_binding(
             e(0, ubuf.as_entire_binding()),
             e(1, view(m.base_color_texture)),
             e(2, view(m.metallic_roughness_texture)),
-            e(3, view(m.normal_texture)),
+            e(
+                3,
+                wgpu::BindingResource::TextureView(normal.unwrap_or(t.white)),
+            ),
             e(4, view(m.emissive_texture)),
             e(5, wgpu::BindingResource::Sampler(t.sampler)),
             e(6, view(m.transmission_texture)),
@@ -567,5 +650,58 @@ fn material_binding(
         bind_group,
         double_sided: m.double_sided,
         alpha_masked: m.alpha_mode != AlphaMode::Opaque,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4 × 4 normal map whose texels tilt by ±θ about x in a checkerboard, as 8-bit texels
+    /// (not unit length once decoded).
+    fn checker(theta: f32) -> Texture {
+        let texels = (0..16)
+            .map(|k| {
+                let s = if (k % 4 + k / 4) % 2 == 0 { 1.0 } else { -1.0 };
+                let n = Vec3::new(0.0, s * theta.sin(), theta.cos());
+                let c = (n * 0.5 + Vec3::splat(0.5)) * 255.0;
+                c.round().extend(255.0) / 255.0
+            })
+            .collect();
+        Texture {
+            name: "checker".into(),
+            width: 4,
+            height: 4,
+            texels: lightlab_scene::Texels::Rgba32F(texels),
+            srgb: false,
+        }
+    }
+
+    #[test]
+    fn normal_mips_hold_the_spread_of_the_finest_normals() {
+        let theta = 0.4f32;
+        let levels = normal_mip_chain(&checker(theta));
+        assert_eq!(levels.len(), 3);
+        let texel = |l: usize, i: usize| -> [f32; 4] {
+            std::array::from_fn(|c| levels[l].2[4 * i + c].to_f32())
+        };
+        // The finest level: unit normals, no spread (8-bit rounding is not bumpiness).
+        for i in 0..16 {
+            let t = texel(0, i);
+            let n = Vec3::new(t[0], t[1], t[2]) * 2.0 - Vec3::ONE;
+            assert!((n.length() - 1.0).abs() < 2e-3, "{n}");
+            assert_eq!(t[3], 0.0);
+        }
+        // Coarser levels: the mean is cos θ long (θ as the 8-bit texels have it), straight up;
+        // σ² = (1 − r)/r.
+        let t0 = texel(0, 0);
+        let r = (Vec3::new(t0[0], t0[1], t0[2]) * 2.0 - Vec3::ONE).normalize().z;
+        assert!((r - theta.cos()).abs() < 5e-3);
+        for l in 1..3 {
+            let t = texel(l, 0);
+            let n = Vec3::new(t[0], t[1], t[2]) * 2.0 - Vec3::ONE;
+            assert!((n - Vec3::Z * r).length() < 5e-3, "level {l}: {n}");
+            assert!(((t[3] - (1.0 - r) / r) / t[3]).abs() < 5e-3, "level {l}: {}", t[3]);
+        }
     }
 }

@@ -18,6 +18,7 @@ pub mod layout;
 pub mod lens_morph;
 pub mod lights;
 pub mod lpv;
+pub mod normal_filter;
 pub mod photometric;
 pub mod prt;
 pub mod raster;

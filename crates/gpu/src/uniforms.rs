@@ -29,6 +29,12 @@ pub struct FrameUniforms {
     /// Plane (n, d): fragments with n·x + d < 0 are discarded (a planar mirror's reflected
     /// view, `raster::mirror`); zero keeps everything.
     pub clip_plane: [f32; 4],
+    /// Normal maps: 0 box-mipped, 1 Toksvig-widened (variance in the map's alpha), 2 the
+    /// finest level (`raster::NormalFilter`).
+    pub normal_filter: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// The light-map source's uniforms (WGSL `LightmapUniforms`): `mode` 1 bilinear, 2 bicubic,
@@ -196,7 +202,11 @@ mod tests {
                     shadow_size,
                     wind_a,
                     wind_b,
-                    clip_plane
+                    clip_plane,
+                    normal_filter,
+                    _pad0,
+                    _pad1,
+                    _pad2
                 ),
             ),
             (

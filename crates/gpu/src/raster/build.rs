@@ -5,7 +5,9 @@ use super::ambient::{AmbientSource, LightmapInput, environment_sun, page_layout,
 use super::bindings::{GroupLayouts, PipelineLayouts, entry};
 use super::light_set::LightSet;
 use super::pipelines::Pipelines;
-use super::settings::{Ambient, RasterError, RasterSettings, ShadowMethod, projection};
+use super::settings::{
+    Ambient, NormalFilter, RasterError, RasterSettings, ShadowMethod, projection,
+};
 use super::targets::{
     ShadowArrays, ShadowMaps, Targets, env_texture, gbuffer_formats, renderable_or,
 };
@@ -186,6 +188,14 @@ fn frame_uniforms(
         linear_bias: s.linear_bias,
         shadow_size: s.shadow_size as f32,
         clip_plane: [0.0; 4],
+        normal_filter: match s.normal_filter {
+            NormalFilter::Box => 0,
+            NormalFilter::Variance => 1,
+            NormalFilter::None => 2,
+        },
+        _pad0: 0,
+        _pad1: 0,
+        _pad2: 0,
     }
 }
 

@@ -36,8 +36,8 @@ mod targets;
 pub use ambient::{LightmapInput, SourceKind};
 pub use settings::{
     Ambient, BadAmbient, CannedLight, CannedPasses, EnvDiffuse, EnvMapKind, EnvPrefilter,
-    FieldObject, FrameTimes, MAX_AREA_LIGHTS, RasterError, RasterSettings, Refraction, RenderPath,
-    ShadowMethod, projection,
+    FieldObject, FrameTimes, MAX_AREA_LIGHTS, NormalFilter, RasterError, RasterSettings,
+    Refraction, RenderPath, ShadowMethod, projection,
 };
 
 use crate::GpuContext;

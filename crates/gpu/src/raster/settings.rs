@@ -154,6 +154,28 @@ impl std::str::FromStr for Ambient {
     }
 }
 
+/// How a normal map's mip levels are lit (Heidrich §9.1.1): a texel of a distant surface
+/// covers many bumps, whose lit average is not the lighting of their average normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NormalFilter {
+    /// Box-mipped normals, renormalised after sampling: distant bumps turn into a flat,
+    /// too-shiny surface.
+    Box,
+    /// Toksvig's filter from a precomputed map: each mip texel's spread of full-resolution
+    /// normals σ² (from the length r of their mean, σ² = (1 − r)/r) widens the reflection
+    /// lobe (`widened_roughness` in common.wgsl).
+    Variance,
+    /// The finest level only, unfiltered: aliases at a distance, exact when supersampled (the
+    /// reference the filters are measured against).
+    None,
+}
+
+lightlab_core::named_enum!(NormalFilter, "normal filter", {
+    Box => "box",
+    Variance => "variance",
+    None => "none",
+});
+
 #[derive(Clone, Debug)]
 pub struct RasterSettings {
     pub width: u32,
@@ -224,6 +246,8 @@ pub struct RasterSettings {
     /// A geometry light field (Heidrich §10.2) for one glass object: its fragments refract
     /// through the baked exit directions instead of the bounding sphere (`refraction`).
     pub object_field: Option<FieldObject>,
+    /// How normal maps are filtered (Heidrich §9.1.1).
+    pub normal_filter: NormalFilter,
 }
 
 /// A glass instance and its geometry light field (`lightlab_core::object_field`).
@@ -291,6 +315,7 @@ impl Default for RasterSettings {
             light_field: vec![],
             planar_mirrors: true,
             object_field: None,
+            normal_filter: NormalFilter::Variance,
         }
     }
 }

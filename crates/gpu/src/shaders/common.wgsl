@@ -28,6 +28,11 @@ struct FrameUniforms {
     wind_b: vec4<f32>,
     // Fragments with n·x + d < 0 are discarded (a planar mirror's reflected view); zero: none.
     clip_plane: vec4<f32>,
+    // Normal maps: 0 box-mipped, 1 Toksvig-widened (variance in alpha), 2 finest level only.
+    normal_filter: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // The light-map source's reads: 1 bilinear, 2 bicubic, +4 directional; E/π pages (directional
@@ -300,6 +305,17 @@ fn sh9(n: vec3<f32>) -> array<f32, 9> {
 fn schlick(c: f32, f0: vec3<f32>) -> vec3<f32> {
     let m = pow(1.0 - clamp(c, 0.0, 1.0), 5.0);
     return f0 + (vec3<f32>(1.0) - f0) * m;
+}
+
+// Toksvig's (2005) filter in roughness terms. Normals spread with per-axis slope variance σ²
+// (Toksvig: the mean of unit normals has length r = 1/(1 + σ²)) widen a lobe over the
+// half-vector of RMS slope α = roughness² (Beckmann, GGX, Blinn-Phong as e = 2/α² − 2, Ward) to
+// α'² = α² + 2σ². Lobes about the mirror direction (Phong, Banks, Lafortune) move twice as fast
+// as the normal, so their exponent widens four times as much: 1/e' = 1/e + 4σ², α'² = α² + 8σ².
+fn widened_roughness(roughness: f32, var2: f32, model: u32) -> f32 {
+    let k = select(2.0, 8.0, model == 2u || model == 7u || model == 8u);
+    let a = roughness * roughness;
+    return min(sqrt(sqrt(a * a + k * max(var2, 0.0))), 1.0);
 }
 
 // Phong / Blinn-Phong exponent of a roughness (as `BrdfModel::exponent`).

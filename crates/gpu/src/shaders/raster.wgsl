@@ -106,8 +106,22 @@ fn surface(in: VertexOut, front: bool) -> Surface {
         n = -n;
     }
     if (material.flags & 4u) != 0u {
-        let t = textureSample(normal_tex, tex_sampler, uv_for(2u, in)).xyz * 2.0 - 1.0;
+        let nuv = uv_for(2u, in);
+        // The variance filter reads one level coarser: what that level averages away turns
+        // into its spread (gloss) instead of detail at the pixel's scale, which shimmers as the
+        // camera moves (measured: `lightlab bench normal-filter`, docs/normal-filtering.md).
+        var t4 = textureSampleBias(normal_tex, tex_sampler, nuv, select(0.0, 1.0, frame.normal_filter == 1u));
+        if frame.normal_filter == 2u {
+            t4 = textureSampleLevel(normal_tex, tex_sampler, nuv, 0.0);
+        }
+        let t = t4.xyz * 2.0 - 1.0;
         let tn = safe_normalize(vec3<f32>(t.xy * material.normal_scale, t.z), vec3<f32>(0.0, 0.0, 1.0));
+        if frame.normal_filter == 1u {
+            // The map's alpha: the spread σ² of the full-resolution normals under this texel
+            // (`gpu_scene::normal_mip_chain`), in slopes scaled as the normals are.
+            let scale2 = material.normal_scale * material.normal_scale;
+            roughness = widened_roughness(roughness, t4.w * scale2, material.model);
+        }
         var tg = in.tangent.xyz - n * dot(in.tangent.xyz, n);
         if dot(tg, tg) > 1e-12 {
             tg = normalize(tg);

@@ -13,6 +13,7 @@
 //! | `luminaire` | a small room lit by measured lamps (goniometric: batwing, wall washer, flood) |
 
 pub mod brdfs;
+pub mod bumps;
 mod dynamic;
 pub mod geom;
 pub mod glass;
