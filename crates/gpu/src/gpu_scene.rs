@@ -695,13 +695,19 @@ mod tests {
         // Coarser levels: the mean is cos θ long (θ as the 8-bit texels have it), straight up;
         // σ² = (1 − r)/r.
         let t0 = texel(0, 0);
-        let r = (Vec3::new(t0[0], t0[1], t0[2]) * 2.0 - Vec3::ONE).normalize().z;
+        let r = (Vec3::new(t0[0], t0[1], t0[2]) * 2.0 - Vec3::ONE)
+            .normalize()
+            .z;
         assert!((r - theta.cos()).abs() < 5e-3);
         for l in 1..3 {
             let t = texel(l, 0);
             let n = Vec3::new(t[0], t[1], t[2]) * 2.0 - Vec3::ONE;
             assert!((n - Vec3::Z * r).length() < 5e-3, "level {l}: {n}");
-            assert!(((t[3] - (1.0 - r) / r) / t[3]).abs() < 5e-3, "level {l}: {}", t[3]);
+            assert!(
+                ((t[3] - (1.0 - r) / r) / t[3]).abs() < 5e-3,
+                "level {l}: {}",
+                t[3]
+            );
         }
     }
 }

@@ -178,9 +178,21 @@ fn builtin_scenes_have_cameras_and_the_specified_sizes() {
     let cornell = builtin::builtin("cornell").unwrap();
     assert!(cornell.materials.iter().any(|m| m.is_emissive()));
     // brdfs: the Fig 5.2 torus at 200 × 200, and the Fig 5.3 tangent fields as authored
-    // (circular: round the centre; radial: away from it), orthogonal to the normals.
+    // (circular: round the centre; radial: away from it), orthogonal to the normals; Fig 9.1's
+    // bumped sphere and torus share one normal-mapped material.
     let brdfs = builtin::builtin("brdfs").unwrap();
-    assert_eq!(brdfs.triangle_count(), 174_592);
+    assert_eq!(brdfs.triangle_count(), 200_096);
+    let bumpy = brdfs
+        .materials
+        .iter()
+        .position(|m| m.normal_texture.is_some());
+    let bumped: Vec<&str> = brdfs
+        .meshes
+        .iter()
+        .filter(|m| Some(m.material) == bumpy)
+        .map(|m| m.name.as_str())
+        .collect();
+    assert_eq!(bumped, ["sphere_perlin", "torus_perlin"]);
     let torus = brdfs
         .meshes
         .iter()

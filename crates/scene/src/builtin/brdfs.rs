@@ -9,8 +9,11 @@
 //!   (KHR_materials_anisotropy strength 0.8) on the circular field, brushed metal as glTF
 //!   writes it.
 //!
-//! The tangent fields are the meshes' own TANGENT (so the scene round-trips through glTF), not
-//! MikkTSpace's. A point light and a low sun light the scene; a grey ground receives shadows.
+//! - Back corners, Fig 9.1: a Blinn-Phong sphere and torus with Perlin-noise normal maps.
+//!
+//! The Fig 5.3 tangent fields are the meshes' own TANGENT (so the scene round-trips through
+//! glTF), not MikkTSpace's. A point light and a low sun light the scene; a grey ground receives
+//! shadows.
 
 use super::geom::*;
 use crate::model::*;
@@ -76,6 +79,43 @@ fn sphere_with(name: &str, r: f32, material: usize, field: Field) -> Mesh {
     m
 }
 
+/// Fig 9.1 (bottom): a sphere and a torus with Perlin-noise normal maps, Blinn-Phong, at the
+/// back corners. Three octaves of tiling noise, RMS slope ≈ 0.4, repeating three times round
+/// the sphere and along the torus's 8 × 2 UV tiles; MikkTSpace tangents.
+fn add_fig_9_1(s: &mut Scene) {
+    let tex = s.textures.len();
+    s.textures.push(super::bumps::perlin_normal_map(
+        "perlin_bumps",
+        256,
+        4,
+        3,
+        0.45,
+    ));
+    let m = s.add_material(Material {
+        name: "plastic_bumpy".into(),
+        base_color: Vec4::new(0.55, 0.5, 0.42, 1.0),
+        roughness: 0.3,
+        specular: 1.0,
+        brdf: BrdfModel::BlinnPhong,
+        normal_texture: Some(TextureRef::new(tex, 0)),
+        ..Default::default()
+    });
+    let r = 0.45;
+    let mut ball = sphere("sphere_perlin", r, 96, 48, m);
+    for uv in &mut ball.uv0 {
+        // parametric's UVs are arc lengths (2πr round, πr pole to pole).
+        *uv *= Vec2::new(3.0 / (TAU * r), 1.5 / (std::f32::consts::PI * r));
+    }
+    ball.compute_tangents();
+    s.add_mesh(ball, Mat4::from_translation(Vec3::new(-3.0, r, -1.3)));
+    let mut ring = torus("torus_perlin", 0.38, 0.16, 128, 64, m);
+    ring.compute_tangents();
+    s.add_mesh(
+        ring,
+        Mat4::from_rotation_translation(Quat::from_rotation_x(1.2), Vec3::new(3.0, 0.75, -1.3)),
+    );
+}
+
 pub fn brdfs() -> Scene {
     let mut s = Scene::default();
     let ground = s.add_material(Material::diffuse("ground", Vec3::splat(0.45)));
@@ -131,6 +171,7 @@ pub fn brdfs() -> Scene {
             Mat4::from_translation(Vec3::new(x, 0.32, 1.1)),
         );
     }
+    add_fig_9_1(&mut s);
     s.lights.push(Light {
         name: "lamp".into(),
         kind: LightKind::Point,

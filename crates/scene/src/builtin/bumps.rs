@@ -86,8 +86,8 @@ lightlab_core::named_enum!(BumpShape, "bump shape", {
 pub const FILTER_TEXELS_PER_METRE: f32 = 256.0 / 2.75;
 
 /// A bump-mapped `shape` of reflection model `brdf` at `roughness` (glossy, with a dielectric's
-/// specular), its normal map three octaves of Perlin noise (RMS slope ≈ 0.4) tiled every
-/// 2.75 m, lit by a sun placed so that the highlight lies in view. A pixel of a 128 × 96 image
+/// specular), its normal map two octaves of Perlin noise (32 and 64 cells per tile, RMS slope
+/// ≈ 0.35) tiled every 2.75 m, lit by a sun placed so that the highlight lies in view. A pixel of a 128 × 96 image
 /// covers 9 to 24 texels of the plane, about 11 of the torus; a pixel of the image 8 × 8
 /// supersampled, at most 3 (so the supersampled reference resolves the bumps).
 pub fn filter_scene(shape: BumpShape, brdf: BrdfModel, roughness: f32) -> Scene {

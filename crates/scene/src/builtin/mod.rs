@@ -61,7 +61,8 @@ pub fn describe(name: &str) -> Option<&'static str> {
         "mirror" => "a wall mirror beside a ball, a box and a pillar: planar reflections",
         "glass" => "a solid glass torus in a striped studio environment: refraction",
         "brdfs" => {
-            "Heidrich's Figs 5.2 and 5.3: Torrance–Sparrow tori, Ward and Banks disks and spheres"
+            "Heidrich's Figs 5.2, 5.3 and 9.1: Torrance–Sparrow tori, Ward and Banks disks and \
+             spheres, Perlin-bumped sphere and torus"
         }
         _ => return None,
     })
