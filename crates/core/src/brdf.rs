@@ -665,6 +665,25 @@ pub fn wallis(m: f64) -> f64 {
     0.5 * PI.sqrt() * scale * series / x.sqrt()
 }
 
+/// The precision of a lookup table's texels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TableBits {
+    /// 8-bit unsigned normalised, as Heidrich's tables (OpenGL 1.2 color tables).
+    Eight,
+    /// 16-bit floating point (IEEE half).
+    Sixteen,
+}
+
+impl TableBits {
+    /// `x` in [0, 1] as stored at this precision.
+    pub fn round(self, x: f64) -> f64 {
+        match self {
+            TableBits::Eight => (x.clamp(0.0, 1.0) * 255.0).round() / 255.0,
+            TableBits::Sixteen => half::f16::from_f64(x).to_f64(),
+        }
+    }
+}
+
 // ---- factorised Torrance–Sparrow (Heidrich §5.1) -----------------------------------------------
 
 /// Torrance–Sparrow split into two 2-D tables (Heidrich §5.1):
@@ -722,6 +741,30 @@ impl FactorizedTs {
         let a = table[y0 * n + x0] * (1.0 - tx) + table[y0 * n + x1] * tx;
         let b = table[y1 * n + x0] * (1.0 - tx) + table[y1 * n + x1] * tx;
         a * (1.0 - ty) + b * ty
+    }
+
+    /// The tables as a GPU would store them: each scaled into [0, 1], rounded to `bits`
+    /// (Heidrich's 8-bit unsigned normalised texels, or 16-bit floating point), and scaled
+    /// back. T1 is scaled by its maximum (D's peak); T2 by its maximum over cos β ≥ 0.1, the
+    /// grazing rows above it clamped: its singularity at cos β → 0 would otherwise take the
+    /// whole 8-bit range (the dynamic-range pitfall of §5.1).
+    pub fn quantized(&self, bits: TableBits) -> FactorizedTs {
+        let n = self.n;
+        let q = |t: &[f64], first_row: usize| -> Vec<f64> {
+            let max = t[first_row * n..]
+                .iter()
+                .cloned()
+                .fold(0.0, f64::max)
+                .max(1e-300);
+            t.iter().map(|x| bits.round(x / max) * max).collect()
+        };
+        let grazing = (0.1 * (n - 1) as f64).ceil() as usize;
+        FactorizedTs {
+            n,
+            t1: q(&self.t1, 0),
+            t2: q(&self.t2, grazing),
+            ks: self.ks,
+        }
     }
 
     /// f(l, v)·cosα from the two tables.
