@@ -8,8 +8,10 @@ use lightlab_bake::prt::{TransferKind, TransferSettings};
 use lightlab_bake::sh_light::{SamplePoints, ShLightSettings};
 use lightlab_bake::view::Filter;
 use lightlab_bake::{BakeSettings, LightMode, Method};
+use lightlab_core::brdf::TableBits;
 use lightlab_core::lpv::Reemit;
 use lightlab_core::sh::Window;
+use lightlab_gpu::brdf_tables::BrdfEval;
 use lightlab_gpu::lights::Attenuation;
 use lightlab_gpu::lpv::{LpvScheme, LpvSettings};
 use lightlab_gpu::prt::ShFilter;
@@ -531,6 +533,13 @@ pub struct RasterArgs {
     /// only: aliases; exact when supersampled).
     #[arg(long, default_value = "variance")]
     pub normal_filter: NormalFilter,
+    /// How Torrance–Sparrow and Banks materials are evaluated: analytic (their formulas) or
+    /// tables (Heidrich's 2-D lookup tables, §5.1–5.2, read per fragment; forward path only).
+    #[arg(long, default_value = "analytic", value_parser = ["analytic", "tables"])]
+    pub brdf_eval: String,
+    /// The lookup tables' texels: 16 (half floats) or 8 (unsigned normalised, as Heidrich's).
+    #[arg(long, default_value = "16", value_parser = ["16", "8"])]
+    pub brdf_table_bits: String,
 }
 
 impl Default for RasterArgs {
@@ -561,6 +570,8 @@ impl Default for RasterArgs {
             env_texels: 2 * 256 * 256,
             planar_mirrors: "on".into(),
             normal_filter: NormalFilter::Variance,
+            brdf_eval: "analytic".into(),
+            brdf_table_bits: "16".into(),
         }
     }
 }
@@ -589,6 +600,17 @@ impl RasterArgs {
             self.wind_time,
         );
         wind.validate().context("--wind")?;
+        let brdf_eval = match (self.brdf_eval.as_str(), self.brdf_table_bits.as_str()) {
+            ("analytic", _) => BrdfEval::Analytic,
+            (_, "8") => BrdfEval::Tables(TableBits::Eight),
+            _ => BrdfEval::Tables(TableBits::Sixteen),
+        };
+        if brdf_eval != BrdfEval::Analytic && self.path == RenderPath::Deferred {
+            bail!(
+                "--brdf-eval tables needs --path forward: the deferred path shades from the \
+                 G-buffer, which does not say which material's tables to read"
+            );
+        }
         Ok(RasterSettings {
             width: width * self.ssaa,
             height: height * self.ssaa,
@@ -614,6 +636,7 @@ impl RasterArgs {
             env_texels: self.env_texels,
             planar_mirrors: self.planar_mirrors == "on",
             normal_filter: self.normal_filter,
+            brdf_eval,
             ..Default::default()
         })
     }

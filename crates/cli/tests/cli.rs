@@ -181,6 +181,23 @@ fn bad_render_requests_fail_with_clear_errors_and_no_output() {
             "--exposure must be a positive number",
         );
     }
+    assert_fails_cleanly(
+        &[
+            "render",
+            "--scene",
+            "brdfs",
+            "--technique",
+            "phong-shadow-maps",
+            "--path",
+            "deferred",
+            "--brdf-eval",
+            "tables",
+            "-o",
+            o,
+        ],
+        &out,
+        "--brdf-eval tables needs --path forward",
+    );
     let bmp = dir.path().join("x.bmp");
     assert_fails_cleanly(
         &["render", "--scene", "cornell", "-o", bmp.to_str().unwrap()],

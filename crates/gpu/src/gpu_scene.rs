@@ -516,8 +516,10 @@ fn upload_materials(
         normals: &normals,
         sampler: &sampler,
     };
+    let (table_layers, _) = crate::brdf_tables::layers(list);
     list.iter()
-        .map(|m| material_binding(device, &textures, m))
+        .zip(table_layers)
+        .map(|(m, layer)| material_binding(device, &textures, m, layer))
         .collect()
 }
 
@@ -533,7 +535,7 @@ struct MaterialTextures<'a> {
 }
 
 /// A material's GPU uniforms: factors, which maps it has and their UV sets, its model.
-fn gpu_material(m: &lightlab_scene::Material) -> GpuMaterial {
+fn gpu_material(m: &lightlab_scene::Material, table_layer: Option<u32>) -> GpuMaterial {
     let refs = [
         m.base_color_texture,
         m.metallic_roughness_texture,
@@ -610,6 +612,7 @@ fn gpu_material(m: &lightlab_scene::Material) -> GpuMaterial {
             0.0,
         ],
         lafortune: m.lafortune.extend(0.0).to_array(),
+        tables: crate::brdf_tables::gpu_entry(m, table_layer),
     }
 }
 
@@ -618,10 +621,11 @@ fn material_binding(
     device: &wgpu::Device,
     t: &MaterialTextures,
     m: &lightlab_scene::Material,
+    table_layer: Option<u32>,
 ) -> GpuMaterialBinding {
     let ubuf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(&m.name),
-        contents: bytemuck::bytes_of(&gpu_material(m)),
+        contents: bytemuck::bytes_of(&gpu_material(m, table_layer)),
         usage: wgpu::BufferUsages::UNIFORM,
     });
     let view = |r: Option<lightlab_scene::TextureRef>| {

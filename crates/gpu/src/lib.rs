@@ -12,6 +12,7 @@
 //! `WGPU_ADAPTER_NAME` (a substring of the adapter name) and `WGPU_POWER_PREF`; the default is
 //! the high-performance adapter of any backend.
 
+pub mod brdf_tables;
 pub mod canned;
 pub mod gpu_scene;
 pub mod layout;

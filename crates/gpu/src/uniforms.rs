@@ -32,7 +32,8 @@ pub struct FrameUniforms {
     /// Normal maps: 0 box-mipped, 1 Toksvig-widened (variance in the map's alpha), 2 the
     /// finest level (`raster::NormalFilter`).
     pub normal_filter: u32,
-    pub _pad0: u32,
+    /// 1: Torrance–Sparrow and Banks materials read their lookup tables (`brdf_tables`).
+    pub brdf_tables: u32,
     pub _pad1: u32,
     pub _pad2: u32,
 }
@@ -166,6 +167,9 @@ pub struct GpuMaterial {
     pub anisotropy: [f32; 4],
     /// The Lafortune lobe's (C_x, C_y, C_z, 0).
     pub lafortune: [f32; 4],
+    /// Lookup tables (`brdf_tables::gpu_entry`): scales of the two tables, first layer, 1 when
+    /// the material has them.
+    pub tables: [f32; 4],
 }
 
 /// The WGSL source that declares these structs.
@@ -204,7 +208,7 @@ mod tests {
                     wind_b,
                     clip_plane,
                     normal_filter,
-                    _pad0,
+                    brdf_tables,
                     _pad1,
                     _pad2
                 ),
@@ -298,7 +302,8 @@ mod tests {
                     conductor_eta,
                     conductor_k,
                     anisotropy,
-                    lafortune
+                    lafortune,
+                    tables
                 ),
             ),
         ];

@@ -1,8 +1,8 @@
 //! The renderer's bind-group layouts, named by role, and typed helpers for their entries.
 //!
 //! Groups: `frame` (0: frame uniforms, lights, shadow views, the per-pass slot, the
-//! goniometric lights' candela tables at 16, a canned light's slices and sampler at 17–18),
-//! the
+//! goniometric lights' candela tables at 16, a canned light's slices and sampler at 17–18, the
+//! materials' BRDF lookup tables at 19), the
 //! material (1, `gpu_scene`), `lighting` (2: shadow maps, then the ambient source's resources),
 //! and the full-screen inputs (3: G-buffer, tonemap source, sky).
 
@@ -105,6 +105,7 @@ impl GroupLayouts {
                 texel_texture(16, Dim::D2Array),
                 filtered_texture(17, Dim::D2Array),
                 sampler(18, S::Filtering),
+                texel_texture(19, Dim::D2Array),
             ],
         );
         // Shadow maps (0–2), the ambient source's bindings (3..), the environment term's (20–25).

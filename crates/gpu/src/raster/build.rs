@@ -62,6 +62,8 @@ struct FrameBuffers {
     /// A canned light's (s,t) slices and their sampler.
     slab: wgpu::TextureView,
     slab_sampler: wgpu::Sampler,
+    /// Heidrich's lookup tables of the materials (`brdf_tables`).
+    brdf_tables: wgpu::TextureView,
 }
 
 impl FrameBuffers {
@@ -69,7 +71,7 @@ impl FrameBuffers {
         ctx: &crate::GpuContext,
         frame: &FrameUniforms,
         ls: &LightSet,
-        canned: &[super::CannedLight],
+        (scene, s): (&Scene, &RasterSettings),
     ) -> FrameBuffers {
         let device = &ctx.device;
         let init = |label, contents: &[u8], usage| {
@@ -108,7 +110,7 @@ impl FrameBuffers {
             put(n + v, li, v);
         }
         let storage = wgpu::BufferUsages::STORAGE;
-        let (slab, slab_sampler) = crate::canned::slab_texture(ctx, canned);
+        let (slab, slab_sampler) = crate::canned::slab_texture(ctx, &s.light_field);
         FrameBuffers {
             frame: init(
                 "frame",
@@ -124,6 +126,7 @@ impl FrameBuffers {
             ),
             slab,
             slab_sampler,
+            brdf_tables: crate::brdf_tables::texture(ctx, scene, s.brdf_eval),
         }
     }
 }
@@ -188,12 +191,12 @@ fn frame_uniforms(
         linear_bias: s.linear_bias,
         shadow_size: s.shadow_size as f32,
         clip_plane: [0.0; 4],
+        brdf_tables: u32::from(s.brdf_eval != crate::brdf_tables::BrdfEval::Analytic),
         normal_filter: match s.normal_filter {
             NormalFilter::Box => 0,
             NormalFilter::Variance => 1,
             NormalFilter::None => 2,
         },
-        _pad0: 0,
         _pad1: 0,
         _pad2: 0,
     }
@@ -268,6 +271,7 @@ fn groups(
                 entry(16, R::TextureView(&buffers.profiles)),
                 entry(17, R::TextureView(&buffers.slab)),
                 entry(18, R::Sampler(&buffers.slab_sampler)),
+                entry(19, R::TextureView(&buffers.brdf_tables)),
             ],
         ),
         lighting,
@@ -451,7 +455,7 @@ impl Renderer {
             ls.light_pos.len(),
             sun.as_ref().map(|(_, e)| e),
         );
-        let buffers = FrameBuffers::new(ctx, &frame, &ls, &settings.light_field);
+        let buffers = FrameBuffers::new(ctx, &frame, &ls, (scene, s));
         let kind = source.kind();
         let layouts = GroupLayouts::new(device, &kind.layout_entries());
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {

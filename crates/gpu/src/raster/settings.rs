@@ -248,6 +248,9 @@ pub struct RasterSettings {
     pub object_field: Option<FieldObject>,
     /// How normal maps are filtered (Heidrich §9.1.1).
     pub normal_filter: NormalFilter,
+    /// Torrance–Sparrow and Banks materials from their formulas or Heidrich's lookup tables
+    /// (forward path; `brdf_tables`).
+    pub brdf_eval: crate::brdf_tables::BrdfEval,
 }
 
 /// A glass instance and its geometry light field (`lightlab_core::object_field`).
@@ -316,6 +319,7 @@ impl Default for RasterSettings {
             planar_mirrors: true,
             object_field: None,
             normal_filter: NormalFilter::Variance,
+            brdf_eval: Default::default(),
         }
     }
 }

@@ -30,7 +30,8 @@ struct FrameUniforms {
     clip_plane: vec4<f32>,
     // Normal maps: 0 box-mipped, 1 Toksvig-widened (variance in alpha), 2 finest level only.
     normal_filter: u32,
-    _pad0: u32,
+    // 1: Torrance–Sparrow and Banks materials read their lookup tables (brdf_tables.rs).
+    brdf_tables: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -167,6 +168,8 @@ struct GpuMaterial {
     anisotropy: vec4<f32>,
     // The Lafortune lobe's (C_x, C_y, C_z, 0).
     lafortune: vec4<f32>,
+    // Lookup tables (brdf_tables.rs): scales of the two tables, first layer, 1 when it has them.
+    tables: vec4<f32>,
 }
 
 // The wind displacement of a world-space vertex (lightlab_core::wind::Wind::sway): `a` =
@@ -216,6 +219,9 @@ struct Surface {
     // the model's lobe parameters: Ward (strength, 0, 0), Lafortune (C_x, C_y, C_z).
     t: vec3<f32>,
     lobe: vec3<f32>,
+    // The material's lookup tables (GpuMaterial::tables) when the frame reads them; w = 0: the
+    // formulas.
+    table: vec4<f32>,
 }
 
 // Two unit vectors completing n to an orthonormal frame (Duff et al. 2017; the same as
@@ -365,6 +371,35 @@ fn beckmann_lambda(c: f32, m: f32) -> f32 {
     return 0.5 * (exp(-a * a) / (a * 1.7724539) - erfc_approx(a));
 }
 
+// Heidrich's lookup tables (brdf_tables.rs): TABLE_SIZE² layers sampled at i/(n − 1), read
+// as the CPU reads them (four loads, bilinear). Bound by the raster passes only.
+@group(0) @binding(19) var brdf_tables: texture_2d_array<f32>;
+
+fn table_read(layer: i32, x: f32, y: f32) -> vec4<f32> {
+    let n = i32(textureDimensions(brdf_tables).x);
+    let fx = clamp(x, 0.0, 1.0) * f32(n - 1);
+    let fy = clamp(y, 0.0, 1.0) * f32(n - 1);
+    let x0 = min(i32(fx), n - 1);
+    let y0 = min(i32(fy), n - 1);
+    let x1 = min(x0 + 1, n - 1);
+    let y1 = min(y0 + 1, n - 1);
+    let tx = fx - f32(x0);
+    let ty = fy - f32(y0);
+    let a = mix(textureLoad(brdf_tables, vec2<i32>(x0, y0), layer, 0), textureLoad(brdf_tables, vec2<i32>(x1, y0), layer, 0), tx);
+    let b = mix(textureLoad(brdf_tables, vec2<i32>(x0, y1), layer, 0), textureLoad(brdf_tables, vec2<i32>(x1, y1), layer, 0), tx);
+    return mix(a, b, ty);
+}
+
+// Torrance–Sparrow's specular f·⟨n,l⟩ from its tables (§5.1): T1(cos θ, √(1 − cos δ)) = F·D
+// (RGB; rows by √(1 − cos δ), not cos δ: see brdf_tables.rs), T2(cos α, cos β) = G/(4 cos β).
+fn torrance_sparrow_tables(s: Surface, v: vec3<f32>, l: vec3<f32>, nv: f32, nl: f32) -> vec3<f32> {
+    let h = normalize(v + l);
+    let layer = i32(s.table.z);
+    let t1 = table_read(layer, dot(l, h), sqrt(max(1.0 - dot(s.n, h), 0.0))).rgb * s.table.x;
+    let t2 = table_read(layer + 1, nl, nv).r * s.table.y;
+    return t1 * t2;
+}
+
 // f(v, l)·⟨n,l⟩ for the front side, the same models as the path tracer (`trace::bsdf`).
 fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     let nl = dot(s.n, l);
@@ -376,6 +411,11 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     if s.model == 7u {
         // Banks's diffuse term: ⟨n', l⟩ = √(1 − ⟨l,t⟩²).
         let a = dot(l, s.t);
+        if s.table.w > 0.0 {
+            // §5.2: one table over (⟨l,t⟩, ⟨v,t⟩): the diffuse factor and the specular term.
+            let tb = table_read(i32(s.table.z), 0.5 * a + 0.5, 0.5 * dot(v, s.t) + 0.5);
+            return (f * tb.r + s.f0 * (tb.g * s.table.y)) * nl;
+        }
         f *= sqrt(max(1.0 - a * a, 0.0));
     }
     if s.model == 1u || all(s.f0 <= vec3<f32>(0.0)) {
@@ -396,6 +436,8 @@ fn brdf_cos(s: Surface, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
         // the environment term sees.
         let frosted = select(0.0, s.delta, s.roughness >= 0.05 && s.thin == 0u);
         f += vec3<f32>(fresnel_dielectric(dot(v, h), s.ior) * d * g / (4.0 * nv * nl) * frosted);
+    } else if s.model == 4u && s.table.w > 0.0 {
+        f += torrance_sparrow_tables(s, v, l, nv, nl) / nl;
     } else if s.model == 4u || s.model == 5u {
         // Torrance–Sparrow (separable Smith G) and Cook–Torrance (V-groove G): Beckmann D of
         // RMS slope m = roughness², the material's Fresnel (trace::bsdf).

@@ -158,6 +158,7 @@ fn surface(in: VertexOut, front: bool) -> Surface {
     s.transmission = material_transmission(in.uv0, in.uv1);
     s.t = vec3<f32>(0.0);
     s.lobe = select(vec3<f32>(material.anisotropy.x, 0.0, 0.0), material.lafortune.xyz, s.model == 8u);
+    s.table = select(vec4<f32>(0.0), material.tables, frame.brdf_tables != 0u && material.tables.w > 0.0);
     if uses_tangent(s.model) {
         // The anisotropy direction (trace::render::anisotropy_direction): the tangent made
         // orthogonal to n, turned towards the bitangent (of the authored front side's normal).
