@@ -181,13 +181,13 @@ pub fn texels(scene: &Scene, bits: TableBits) -> (Vec<[f32; 4]>, u32) {
 }
 
 /// The tables of `scene`'s materials as a texture array for `eval` (two black 1 × 1 layers when
-/// the formulas are used; arrays keep two layers or more for GL).
+/// the formulas are used; `resources::array_layers` keeps GL from taking it for a cube map).
 pub fn texture(ctx: &crate::GpuContext, scene: &Scene, eval: BrdfEval) -> wgpu::TextureView {
     let (data, layers, size, bits) = match eval {
         BrdfEval::Analytic => (vec![[0.0f32; 4]; 2], 2, 1, TableBits::Sixteen),
         BrdfEval::Tables(bits) => {
             let (mut data, layers) = texels(scene, bits);
-            let layers = layers.max(2);
+            let layers = crate::resources::array_layers(layers);
             data.resize(layers as usize * TABLE_SIZE * TABLE_SIZE, [0.0; 4]);
             (data, layers, TABLE_SIZE as u32, bits)
         }

@@ -34,6 +34,17 @@ pub fn texture(
     })
 }
 
+/// A layer count for a square array texture that the GL backend binds as an array: at least 2
+/// and not a multiple of 6 (wgpu's GL backend chooses a texture's target when it is made, and
+/// takes 1 layer for a 2D texture and a multiple of 6 square layers for a cube map).
+pub fn array_layers(n: u32) -> u32 {
+    let mut n = n.max(2);
+    while n % 6 == 0 {
+        n += 1;
+    }
+    n
+}
+
 /// One layer of an array texture as a 2D view.
 pub fn layer_view(t: &wgpu::Texture, layer: u32) -> wgpu::TextureView {
     t.create_view(&wgpu::TextureViewDescriptor {
