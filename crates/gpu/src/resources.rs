@@ -39,7 +39,7 @@ pub fn texture(
 /// takes 1 layer for a 2D texture and a multiple of 6 square layers for a cube map).
 pub fn array_layers(n: u32) -> u32 {
     let mut n = n.max(2);
-    while n % 6 == 0 {
+    while n.is_multiple_of(6) {
         n += 1;
     }
     n
