@@ -47,11 +47,13 @@ pub fn run(a: &NormalFilterBenchArgs, json: bool) -> Result<()> {
     let filters = [
         NormalFilter::Box,
         NormalFilter::Variance,
+        NormalFilter::Lit,
         NormalFilter::None,
     ];
     println!(
-        "shape | model | roughness | relMSE box / variance / none | shimmer box / variance / \
-         none (reference) | error ratio | shimmer ratio"
+        "shape | model | roughness | relMSE box / variance / lit / none | shimmer box / \
+         variance / lit / none (reference) | error ratio box/variance, box/lit | shimmer ratio \
+         box/variance, box/lit"
     );
     let mut rows = vec![];
     for &shape in &a.shapes {
@@ -59,11 +61,19 @@ pub fn run(a: &NormalFilterBenchArgs, json: bool) -> Result<()> {
             for &roughness in &a.roughness {
                 let scene = filter_scene(shape, model, roughness);
                 let (f, moved) = measure(&ctx, &scene, &scene.cameras[0], &study, &filters)?;
-                let (er, sr) = (f[0].relmse / f[1].relmse, f[0].flicker / f[1].flicker);
+                let ratio = |k: usize| (f[0].relmse / f[k].relmse, f[0].flicker / f[k].flicker);
+                let ((ev, sv), (el, sl)) = (ratio(1), ratio(2));
                 println!(
-                    "{shape} | {model} | {roughness} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / \
-                     {:.4} ({moved:.4}) | {er:.1} | {sr:.1}",
-                    f[0].relmse, f[1].relmse, f[2].relmse, f[0].flicker, f[1].flicker, f[2].flicker
+                    "{shape} | {model} | {roughness} | {:.4} / {:.4} / {:.4} / {:.4} | {:.4} / \
+                     {:.4} / {:.4} / {:.4} ({moved:.4}) | {ev:.1}, {el:.1} | {sv:.1}, {sl:.1}",
+                    f[0].relmse,
+                    f[1].relmse,
+                    f[2].relmse,
+                    f[3].relmse,
+                    f[0].flicker,
+                    f[1].flicker,
+                    f[2].flicker,
+                    f[3].flicker
                 );
                 rows.push(serde_json::json!({
                     "shape": shape.to_string(), "model": model.to_string(),

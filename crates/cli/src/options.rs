@@ -528,9 +528,11 @@ pub struct RasterArgs {
     pub planar_mirrors: String,
     /// How normal maps are filtered where their texels are smaller than a pixel (Heidrich
     /// §9.1.1): variance (Toksvig: the normals' spread under each mip texel widens the
-    /// reflection lobe, so distant bumps turn into the gloss they make), box (box-mipped
-    /// normals: distant bumps shine like a flat surface and shimmer) or none (the finest level
-    /// only: aliases; exact when supersampled).
+    /// reflection lobe, so distant bumps turn into the gloss they make), lit (Heidrich's order:
+    /// each light lights 4 × 4 normals under the pixel, then they are averaged; forward path,
+    /// 16 times the lighting cost on normal-mapped surfaces), box (box-mipped normals: distant
+    /// bumps shine like a flat surface and shimmer) or none (the finest level only: aliases;
+    /// exact when supersampled).
     #[arg(long, default_value = "variance")]
     pub normal_filter: NormalFilter,
     /// How Torrance–Sparrow and Banks materials are evaluated: analytic (their formulas) or
@@ -605,6 +607,12 @@ impl RasterArgs {
             (_, "8") => BrdfEval::Tables(TableBits::Eight),
             _ => BrdfEval::Tables(TableBits::Sixteen),
         };
+        if self.normal_filter == NormalFilter::Lit && self.path == RenderPath::Deferred {
+            bail!(
+                "--normal-filter lit needs --path forward: the deferred path lights one normal \
+                 per pixel from the G-buffer"
+            );
+        }
         if brdf_eval != BrdfEval::Analytic && self.path == RenderPath::Deferred {
             bail!(
                 "--brdf-eval tables needs --path forward: the deferred path shades from the \

@@ -198,6 +198,23 @@ fn bad_render_requests_fail_with_clear_errors_and_no_output() {
         &out,
         "--brdf-eval tables needs --path forward",
     );
+    assert_fails_cleanly(
+        &[
+            "render",
+            "--scene",
+            "spheres",
+            "--technique",
+            "phong",
+            "--path",
+            "deferred",
+            "--normal-filter",
+            "lit",
+            "-o",
+            o,
+        ],
+        &out,
+        "--normal-filter lit needs --path forward",
+    );
     let bmp = dir.path().join("x.bmp");
     assert_fails_cleanly(
         &["render", "--scene", "cornell", "-o", bmp.to_str().unwrap()],

@@ -196,6 +196,7 @@ fn frame_uniforms(
             NormalFilter::Box => 0,
             NormalFilter::Variance => 1,
             NormalFilter::None => 2,
+            NormalFilter::Lit => 3,
         },
         _pad1: 0,
         _pad2: 0,

@@ -168,12 +168,18 @@ pub enum NormalFilter {
     /// The finest level only, unfiltered: aliases at a distance, exact when supersampled (the
     /// reference the filters are measured against).
     None,
+    /// Heidrich's order, lighting before filtering: the per-light passes of the forward path
+    /// light 4 × 4 normals under each pixel (each read over a sixteenth of its footprint and
+    /// Toksvig-widened) and average them (`lit_then_filtered` in raster.wgsl); the ambient and
+    /// environment terms filter as `Variance`. The deferred path refuses it.
+    Lit,
 }
 
 lightlab_core::named_enum!(NormalFilter, "normal filter", {
     Box => "box",
     Variance => "variance",
     None => "none",
+    Lit => "lit",
 });
 
 #[derive(Clone, Debug)]

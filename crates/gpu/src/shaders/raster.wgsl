@@ -85,6 +85,54 @@ fn vertex_normal(in: VertexOut, front: bool) -> vec3<f32> {
 }
 
 // The surface of a rasterised fragment: textures, normal map, normals turned to the viewer.
+// A normal-map texel t4 (xyz·½ + ½) as a world normal around the front-facing vertex normal
+// n, in the vertex's tangent frame (glTF: bitangent n × t · w).
+fn map_normal(in: VertexOut, n: vec3<f32>, t4: vec4<f32>) -> vec3<f32> {
+    let t = t4.xyz * 2.0 - 1.0;
+    let tn = safe_normalize(vec3<f32>(t.xy * material.normal_scale, t.z), vec3<f32>(0.0, 0.0, 1.0));
+    var tg = in.tangent.xyz - n * dot(in.tangent.xyz, n);
+    if dot(tg, tg) <= 1e-12 {
+        return n;
+    }
+    tg = normalize(tg);
+    let bt = cross(n, tg) * in.tangent.w;
+    return safe_normalize(tg * tn.x + bt * tn.y + n * tn.z, n);
+}
+
+// Interpolated and mapped normals can face away from the viewer at silhouettes: keep them in
+// front (ng faces the viewer, v towards it).
+fn face_viewer(n: vec3<f32>, ng: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    if dot(n, v) < 0.0 {
+        return safe_normalize(n - ng * (dot(n, ng) - 1e-3), ng);
+    }
+    return n;
+}
+
+const LIT_SAMPLES: i32 = 4;
+
+// Heidrich §9.1.1 (`--normal-filter lit`): light the normals under the pixel, then average,
+// instead of lighting their average. LIT_SAMPLES² samples over the pixel's footprint in the
+// map (its UV derivatives du, dv), each read with a footprint LIT_SAMPLES times smaller (the
+// gradients du, dv / LIT_SAMPLES: the sampler picks the level, anisotropy included), each lobe
+// widened by its own texels' spread; the average of their lighting. 4 × 4 reaches the 8 × 8
+// supersampled reference's noise floor on `builtin::bumps` (8 × 8 samples: no closer).
+fn lit_then_filtered(in: VertexOut, front: bool, s0: Surface, li: GpuLight, v: vec3<f32>, uv: vec2<f32>, du: vec2<f32>, dv: vec2<f32>, roughness: f32) -> vec3<f32> {
+    let nv = vertex_normal(in, front);
+    let scale2 = material.normal_scale * material.normal_scale;
+    var sum = vec3<f32>(0.0);
+    for (var j = 0; j < LIT_SAMPLES; j++) {
+        for (var i = 0; i < LIT_SAMPLES; i++) {
+            let o = (vec2<f32>(f32(i), f32(j)) + 0.5) / f32(LIT_SAMPLES) - 0.5;
+            let t4 = textureSampleGrad(normal_tex, tex_sampler, uv + o.x * du + o.y * dv, du / f32(LIT_SAMPLES), dv / f32(LIT_SAMPLES));
+            var sk = s0;
+            sk.n = face_viewer(map_normal(in, nv, t4), s0.ng, v);
+            sk.roughness = widened_roughness(roughness, t4.w * scale2, material.model);
+            sum += shade_light(sk, li, v);
+        }
+    }
+    return sum / f32(LIT_SAMPLES * LIT_SAMPLES);
+}
+
 fn surface(in: VertexOut, front: bool) -> Surface {
     var s: Surface;
     s.p = in.world;
@@ -109,31 +157,22 @@ fn surface(in: VertexOut, front: bool) -> Surface {
         let nuv = uv_for(2u, in);
         // The variance filter reads one level coarser: what that level averages away turns
         // into its spread (gloss) instead of detail at the pixel's scale, which shimmers as the
-        // camera moves (measured: `lightlab bench normal-filter`, docs/normal-filtering.md).
-        var t4 = textureSampleBias(normal_tex, tex_sampler, nuv, select(0.0, 1.0, frame.normal_filter == 1u));
+        // camera moves (measured: `lightlab bench normal-filter`, docs/normal-maps.md). The lit
+        // filter does the same outside the per-light passes (`lit_then_filtered`).
+        let variance = frame.normal_filter == 1u || frame.normal_filter == 3u;
+        var t4 = textureSampleBias(normal_tex, tex_sampler, nuv, select(0.0, 1.0, variance));
         if frame.normal_filter == 2u {
             t4 = textureSampleLevel(normal_tex, tex_sampler, nuv, 0.0);
         }
-        let t = t4.xyz * 2.0 - 1.0;
-        let tn = safe_normalize(vec3<f32>(t.xy * material.normal_scale, t.z), vec3<f32>(0.0, 0.0, 1.0));
-        if frame.normal_filter == 1u {
+        if variance {
             // The map's alpha: the spread σ² of the full-resolution normals under this texel
             // (`gpu_scene::normal_mip_chain`), in slopes scaled as the normals are.
             let scale2 = material.normal_scale * material.normal_scale;
             roughness = widened_roughness(roughness, t4.w * scale2, material.model);
         }
-        var tg = in.tangent.xyz - n * dot(in.tangent.xyz, n);
-        if dot(tg, tg) > 1e-12 {
-            tg = normalize(tg);
-            let bt = cross(n, tg) * in.tangent.w;
-            n = safe_normalize(tg * tn.x + bt * tn.y + n * tn.z, n);
-        }
+        n = map_normal(in, n, t4);
     }
-    // Interpolated normals can face away from the viewer at silhouettes: keep them in front.
-    if dot(n, v) < 0.0 {
-        n = safe_normalize(n - ng * (dot(n, ng) - 1e-3), ng);
-    }
-    s.n = n;
+    s.n = face_viewer(n, ng, v);
     s.ng = ng;
     s.delta = material.spec_transmission * (1.0 - metallic);
     s.ior = material.ior;
@@ -421,7 +460,24 @@ fn light_fs(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) v
     // A radiance field holds a derived light's share (area lights, the environment's sun).
     let derived = pass_u.light_index >= env_u.scene_lights;
     let keep = select(1.0, 0.0, derived & env_radiance_field(in.instance));
-    return vec4<f32>(shade_light(s, li, v) * vis * keep, 0.0);
+    // Derivatives in uniform control flow, for the lit normal filter.
+    let nuv = uv_for(2u, in);
+    let du = dpdx(nuv);
+    let dv = dpdy(nuv);
+    let ruv = uv_for(1u, in);
+    let rdx = dpdx(ruv);
+    let rdy = dpdy(ruv);
+    var c: vec3<f32>;
+    if frame.normal_filter == 3u && (material.flags & 4u) != 0u {
+        var roughness = material.roughness;
+        if (material.flags & 2u) != 0u {
+            roughness *= textureSampleGrad(mr_tex, tex_sampler, ruv, rdx, rdy).y;
+        }
+        c = lit_then_filtered(in, front, s, li, v, nuv, du, dv, roughness);
+    } else {
+        c = shade_light(s, li, v);
+    }
+    return vec4<f32>(c * vis * keep, 0.0);
 }
 
 // ---- deferred path -----------------------------------------------------------------------------
