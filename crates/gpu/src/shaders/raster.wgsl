@@ -84,7 +84,6 @@ fn vertex_normal(in: VertexOut, front: bool) -> vec3<f32> {
     return select(-n, n, front);
 }
 
-// The surface of a rasterised fragment: textures, normal map, normals turned to the viewer.
 // A normal-map texel t4 (xyz·½ + ½) as a world normal around the front-facing vertex normal
 // n, in the vertex's tangent frame (glTF: bitangent n × t · w).
 fn map_normal(in: VertexOut, n: vec3<f32>, t4: vec4<f32>) -> vec3<f32> {
@@ -133,6 +132,7 @@ fn lit_then_filtered(in: VertexOut, front: bool, s0: Surface, li: GpuLight, v: v
     return sum / f32(LIT_SAMPLES * LIT_SAMPLES);
 }
 
+// The surface of a rasterised fragment: textures, normal map, normals turned to the viewer.
 fn surface(in: VertexOut, front: bool) -> Surface {
     var s: Surface;
     s.p = in.world;
