@@ -44,9 +44,26 @@ impl Drop for InFlight {
     }
 }
 
+/// Set when the process is stopping (a signal): outputs written after it fail instead of
+/// creating files in folders being removed.
+static STOPPING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// An output may not start: the process is stopping.
+fn refuse_if_stopping(path: &Path) -> Result<(), crate::image::ImageError> {
+    if STOPPING.load(std::sync::atomic::Ordering::SeqCst) {
+        return Err(crate::image::ImageError::Io {
+            path: path.into(),
+            source: std::io::Error::new(std::io::ErrorKind::Interrupted, "stopping"),
+        });
+    }
+    Ok(())
+}
+
 /// Remove every temporary file and staging folder in flight (for a signal handler, just
-/// before the process exits). Returns how many paths were removed.
+/// before the process exits), after which no new output starts. Returns how many paths were
+/// removed.
 pub fn remove_in_flight() -> usize {
+    STOPPING.store(true, std::sync::atomic::Ordering::SeqCst);
     remove_listed(|_| true)
 }
 
@@ -58,13 +75,31 @@ fn remove_listed(which: impl Fn(&Path) -> bool) -> usize {
     let mut n = 0;
     for p in paths.into_iter().filter(|p| which(p)) {
         let removed = if p.is_dir() {
-            std::fs::remove_dir_all(&p)
+            remove_dir_while_written(&p)
         } else {
             std::fs::remove_file(&p)
         };
         n += removed.is_ok() as usize;
     }
     n
+}
+
+/// Remove folder `p` although other threads of the process may still be writing into it (a
+/// signal arrives mid-bake; the reliability test's SIGINT once left a staging folder behind):
+/// a file created between `remove_dir_all`'s listing and its last `rmdir` makes it fail with
+/// "directory not empty", so it tries again, up to 50 times over about 50 ms. New outputs
+/// are refused once the process is stopping, so only the writes already under way can race.
+fn remove_dir_while_written(p: &Path) -> std::io::Result<()> {
+    let mut last = Ok(());
+    for _ in 0..50 {
+        match std::fs::remove_dir_all(p) {
+            Ok(()) => return Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+            Err(e) => last = Err(e),
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    last
 }
 
 /// Whether process `pid` may still be running. On systems without `/proc` every process is
@@ -138,6 +173,7 @@ pub fn write_atomic<E: From<crate::image::ImageError>>(
     path: &Path,
     write: impl FnOnce(File) -> Result<(), E>,
 ) -> Result<(), E> {
+    refuse_if_stopping(path)?;
     remove_stale(path);
     let tmp = InFlight::new(temporary_name(path));
     let io = |e: std::io::Error, p: &Path| crate::image::ImageError::Io {
@@ -170,6 +206,7 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<(), crate::image
     }
     let mut temps = vec![];
     for (path, bytes) in files {
+        refuse_if_stopping(path)?;
         remove_stale(path);
         let tmp = InFlight::new(temporary_name(path));
         let written = std::fs::write(tmp.path(), bytes).map_err(|e| io(e, path));
@@ -196,6 +233,39 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<(), crate::image
 mod tests {
     use super::*;
     use std::io::Write;
+
+    /// A signal handler removes a staging folder that worker threads are still filling (the
+    /// reliability test's SIGINT mid-bake once left one behind): `remove_dir_all` alone fails
+    /// when a file appears during it.
+    #[test]
+    fn a_folder_being_written_is_removed_whole() {
+        for round in 0..10 {
+            let tmp = tempfile::tempdir().unwrap();
+            let dir = tmp.path().join(format!(".lm.{round}.staging"));
+            std::fs::create_dir(&dir).unwrap();
+            let writers: Vec<_> = (0..2)
+                .map(|w| {
+                    let dir = dir.clone();
+                    std::thread::spawn(move || {
+                        // Pages as a bake writes them: a few hundred per second per thread.
+                        for i in 0..2000 {
+                            let page = dir.join(format!("{w}-{i}"));
+                            if std::fs::write(page, b"page").is_err() {
+                                break;
+                            }
+                            std::thread::sleep(std::time::Duration::from_micros(200));
+                        }
+                    })
+                })
+                .collect();
+            std::thread::sleep(std::time::Duration::from_millis(5));
+            remove_dir_while_written(&dir).unwrap();
+            for w in writers {
+                w.join().unwrap();
+            }
+            assert!(!dir.exists(), "round {round}");
+        }
+    }
 
     #[test]
     fn stale_temporaries_of_dead_processes_are_removed_and_live_ones_kept() {
