@@ -120,23 +120,7 @@ pub fn material_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 
 /// Box-filtered mip chain of a linear RGBA texture, as f16.
 fn mip_chain(t: &Texture) -> Vec<(u32, u32, Vec<half::f16>)> {
-    let mut levels = vec![];
-    let (mut w, mut h) = (t.width.max(1), t.height.max(1));
-    let mut cur: Vec<Vec4> = t.to_linear();
-    loop {
-        levels.push((
-            w,
-            h,
-            cur.iter()
-                .flat_map(|c| c.to_array().map(half::f16::from_f32))
-                .collect(),
-        ));
-        if w == 1 && h == 1 {
-            break;
-        }
-        (cur, w, h) = box_down(&cur, w, h);
-    }
-    levels
+    box_chain(t, t.to_linear(), |c| c.to_array())
 }
 
 /// The mip chain of a tangent-space normal map for every `raster::NormalFilter`: RGB the box
@@ -146,26 +130,37 @@ fn mip_chain(t: &Texture) -> Vec<(u32, u32, Vec<half::f16>)> {
 /// are not unit, and would read as spread), so its σ² is 0 and magnified maps are not widened.
 /// The means are kept in f32 between levels; only the stored texels are f16.
 fn normal_mip_chain(t: &Texture) -> Vec<(u32, u32, Vec<half::f16>)> {
-    let mut levels = vec![];
-    let (mut w, mut h) = (t.width.max(1), t.height.max(1));
-    let mut cur: Vec<Vec3> = t
+    let unit = t
         .to_linear()
         .iter()
         .map(|c| (c.truncate() * 2.0 - Vec3::ONE).normalize_or(Vec3::Z))
         .collect();
+    box_chain(t, unit, |m| {
+        let r = m.length().max(1e-3);
+        let spread = ((1.0 - r) / r).clamp(0.0, 16.0);
+        (*m * 0.5 + Vec3::splat(0.5)).extend(spread).to_array()
+    })
+}
+
+/// Every level of `finest` (`t`'s size) box-filtered down to 1 × 1 in f32, each stored as the
+/// f16 RGBA of `texel`.
+fn box_chain<T>(
+    t: &Texture,
+    finest: Vec<T>,
+    texel: impl Fn(&T) -> [f32; 4],
+) -> Vec<(u32, u32, Vec<half::f16>)>
+where
+    T: Copy + Default + std::ops::Add<Output = T> + std::ops::Div<f32, Output = T>,
+{
+    let mut levels = vec![];
+    let (mut w, mut h) = (t.width.max(1), t.height.max(1));
+    let mut cur = finest;
     loop {
-        let texel = |m: &Vec3| {
-            let r = m.length().max(1e-3);
-            let spread = ((1.0 - r) / r).clamp(0.0, 16.0);
-            (*m * 0.5 + Vec3::splat(0.5)).extend(spread).to_array()
-        };
-        levels.push((
-            w,
-            h,
-            cur.iter()
-                .flat_map(|m| texel(m).map(half::f16::from_f32))
-                .collect(),
-        ));
+        let data = cur
+            .iter()
+            .flat_map(|c| texel(c).map(half::f16::from_f32))
+            .collect();
+        levels.push((w, h, data));
         if w == 1 && h == 1 {
             break;
         }
