@@ -1,4 +1,4 @@
-//! CPU ray casting over a compressed wide BVH (obvhs CWBVH, PLOC build).
+//! CPU ray casting over an 8-wide SIMD BVH ([`crate::bvh8`], built by obvhs's PLOC).
 //!
 //! The scene's instances are flattened into world-space triangles stored in BVH leaf order, so a
 //! leaf's triangles are contiguous in memory. Closest-hit queries return the distance,
@@ -6,11 +6,12 @@
 //! Alpha-tested (MASK, and BLEND treated as MASK at 0.5) triangles are tested against their
 //! texture inside the traversal, so holes in leaves let rays through.
 
+use crate::bvh8::Bvh8;
 use glam::{Mat3, Vec2, Vec3, Vec3A};
 use lightlab_scene::{AlphaMode, Scene, Texture};
-use obvhs::ray::{Ray, RayHit};
+use obvhs::ray::Ray;
 use obvhs::rt_triangle::RtTriangle;
-use obvhs::{BvhBuildParams, cwbvh::CwBvh, triangle::Triangle};
+use obvhs::{BvhBuildParams, triangle::Triangle};
 use rayon::prelude::*;
 
 /// Where a triangle came from.
@@ -45,8 +46,8 @@ struct AlphaTri {
 
 /// The acceleration structure of a scene.
 pub struct Accel {
-    bvh: CwBvh,
-    /// Triangles in BVH primitive order.
+    bvh: Bvh8,
+    /// Triangles by BVH slot (unused slots hold a degenerate triangle).
     tris: Vec<RtTriangle>,
     prims: Vec<PrimRef>,
     /// Index into `alpha` per BVH primitive, u32::MAX when opaque.
@@ -97,28 +98,19 @@ fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
     Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax)
 }
 
-/// Möller–Trumbore over obvhs's triangle layout (`e1 = v0 − v1`, `e2 = v2 − v0`,
-/// `ng = e1 × e2`). obvhs's own `RtTriangle::intersect` tests barycentrics by their sign bit,
-/// which rejects `−0.0`: axis-aligned rays (a camera ray through the image centre) then miss.
-/// Ordinary comparisons accept `−0.0 ≥ 0`.
-#[inline(always)]
-fn intersect_triangle(tri: &RtTriangle, ray: &Ray) -> f32 {
-    let det = tri.ng.dot(ray.direction);
-    if det == 0.0 {
-        return f32::INFINITY;
-    }
-    let inv_det = 1.0 / det;
-    let c = tri.v0 - ray.origin;
-    let r = ray.direction.cross(c);
-    let u = r.dot(tri.e2) * inv_det;
-    let v = r.dot(tri.e1) * inv_det;
-    if u >= 0.0 && v >= 0.0 && u + v <= 1.0 {
-        let t = tri.ng.dot(c) * inv_det;
-        if t > ray.tmin && t <= ray.tmax {
-            return t;
-        }
-    }
-    f32::INFINITY
+/// The BVH build: obvhs's slow preset (PLOC with pre-splits and re-insertion; a build is a
+/// small part of any render), leaves of at most four triangles (one SIMD block).
+fn build_params() -> BvhBuildParams {
+    let mut p = BvhBuildParams::slow_build();
+    p.max_prims_per_leaf = std::env::var("LL_LEAF")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4);
+    p.collapse_traversal_cost = std::env::var("LL_TCOST")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(3.0);
+    p
 }
 
 /// A ray for batch queries.
@@ -176,20 +168,28 @@ impl Accel {
                 }));
             }
         }
-        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
-            &tris,
-            BvhBuildParams::slow_build(),
-            &mut std::time::Duration::default(),
-        );
-        // Reorder the primitives into BVH order.
-        let order = &bvh.primitive_indices;
+        let bvh = Bvh8::build(&tris, build_params(), |i| alpha_of[i].is_some());
+        // Per slot: the triangle, where it came from and its alpha record (pre-splits may put
+        // one triangle in several leaves; unused slots get a degenerate triangle no ray hits).
+        let unused = Triangle {
+            v0: Vec3A::ZERO,
+            v1: Vec3A::ZERO,
+            v2: Vec3A::ZERO,
+        };
+        let order = &bvh.slot_triangle;
         let rt: Vec<RtTriangle> = order
             .iter()
-            .map(|&i| RtTriangle::from(&tris[i as usize]))
+            .map(|&i| RtTriangle::from(tris.get(i as usize).unwrap_or(&unused)))
             .collect();
-        let prims_o: Vec<PrimRef> = order.iter().map(|&i| prims[i as usize]).collect();
-        // Alpha records by original triangle; BVH slots (pre-splits may duplicate a triangle)
-        // point at them.
+        let prims_o: Vec<PrimRef> = order
+            .iter()
+            .map(|&i| {
+                prims.get(i as usize).copied().unwrap_or(PrimRef {
+                    instance: u32::MAX,
+                    triangle: u32::MAX,
+                })
+            })
+            .collect();
         let mut alpha = vec![];
         let orig_alpha: Vec<u32> = alpha_of
             .into_iter()
@@ -201,7 +201,10 @@ impl Accel {
                 None => u32::MAX,
             })
             .collect();
-        let alpha_index: Vec<u32> = order.iter().map(|&i| orig_alpha[i as usize]).collect();
+        let alpha_index: Vec<u32> = order
+            .iter()
+            .map(|&i| orig_alpha.get(i as usize).copied().unwrap_or(u32::MAX))
+            .collect();
         // Only the textures alpha tests read are kept (a copy of every texture doubled the
         // memory of a textured scene); AlphaTri::texture is renumbered into this list.
         let mut kept: Vec<u32> = alpha.iter().filter_map(|a| a.texture).collect();
@@ -262,47 +265,34 @@ impl Accel {
         alpha < a.cutoff
     }
 
-    #[inline]
-    fn test(&self, ray: &Ray, slot: usize) -> f32 {
-        let t = intersect_triangle(&self.tris[slot], ray);
-        if t < f32::INFINITY && self.alpha_rejects(slot, &Ray { tmax: t, ..*ray }) {
-            return f32::INFINITY;
-        }
-        t
-    }
-
     /// Closest hit along `origin + t·dir`, t ∈ (0, tmax]. `dir` need not be normalised
     /// (t is in units of `dir`).
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
         self.rays.add();
         let ray = make_ray(origin, dir, tmax);
-        let mut hit = RayHit::none();
-        if self
-            .bvh
-            .ray_traverse(ray, &mut hit, |r, slot| self.test(r, slot))
-        {
-            let slot = hit.primitive_id as usize;
-            let at = Ray { tmax: hit.t, ..ray };
-            // obvhs's (u, v) are the weights of v1 and v2 (v0 gets 1 − u − v).
-            let b = self.tris[slot].compute_barycentric(&at);
-            Some(Hit {
-                t: hit.t,
-                prim: self.prims[slot],
-                bary: b,
-                slot: slot as u32,
-            })
-        } else {
-            None
-        }
+        let dir = Vec3::from(ray.direction);
+        let (slot, t) = self.bvh.closest(origin, dir, 0.0, tmax, |slot, t| {
+            self.alpha_rejects(slot, &Ray { tmax: t, ..ray })
+        })?;
+        let at = Ray { tmax: t, ..ray };
+        // obvhs's (u, v) are the weights of v1 and v2 (v0 gets 1 − u − v).
+        let b = self.tris[slot as usize].compute_barycentric(&at);
+        Some(Hit {
+            t,
+            prim: self.prims[slot as usize],
+            bary: b,
+            slot,
+        })
     }
 
-    /// Whether anything blocks `origin + t·dir` for t ∈ (0, tmax).
+    /// Whether anything blocks `origin + t·dir` for t ∈ (0, tmax].
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         self.rays.add();
         let ray = make_ray(origin, dir, tmax);
-        !self
-            .bvh
-            .ray_traverse_miss(ray, |r, slot| self.test(r, slot))
+        self.bvh
+            .any(origin, Vec3::from(ray.direction), 0.0, tmax, |slot, t| {
+                self.alpha_rejects(slot, &Ray { tmax: t, ..ray })
+            })
     }
 
     /// Rays cast through this structure so far (closest-hit and occlusion queries).

@@ -7,6 +7,7 @@
 
 pub mod accel;
 pub mod bsdf;
+pub mod bvh8;
 pub mod lights;
 pub mod luminaire;
 pub mod radiance_field;
