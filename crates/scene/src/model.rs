@@ -57,11 +57,14 @@ pub struct Mesh {
 impl Mesh {
     /// Both UV sets and the vertex colour at barycentric weights `bw` of the triangle `idx`
     /// (zeros where the mesh has no UV0, white where it has no colours).
+    #[inline]
     pub fn uv_at(&self, idx: [usize; 3], bw: [f32; 3]) -> Attrs {
-        Attrs::weighted(&idx.map(|i| self.attrs_of(i)), bw)
+        let [a, b, c] = idx;
+        Attrs::weighted(&[self.attrs_of(a), self.attrs_of(b), self.attrs_of(c)], bw)
     }
 
     /// The attributes of vertex `i`.
+    #[inline]
     pub fn attrs_of(&self, i: usize) -> Attrs {
         let uv0 = self.uv0.get(i).copied().unwrap_or_default();
         let uv1 = self
@@ -76,6 +79,7 @@ impl Mesh {
     }
 
     /// The attributes of triangle `t`'s corners.
+    #[inline]
     pub fn corners(&self, t: &[u32]) -> [Attrs; 3] {
         [t[0], t[1], t[2]].map(|i| self.attrs_of(i as usize))
     }
@@ -165,9 +169,13 @@ impl Attrs {
     }
 
     /// The barycentric combination of three corners' attributes.
+    #[inline]
     pub fn weighted(c: &[Attrs; 3], bw: [f32; 3]) -> Attrs {
         Attrs {
-            uv: [0, 1].map(|k| c[0].uv[k] * bw[0] + c[1].uv[k] * bw[1] + c[2].uv[k] * bw[2]),
+            uv: [
+                c[0].uv[0] * bw[0] + c[1].uv[0] * bw[1] + c[2].uv[0] * bw[2],
+                c[0].uv[1] * bw[0] + c[1].uv[1] * bw[1] + c[2].uv[1] * bw[2],
+            ],
             color: c[0].color * bw[0] + c[1].color * bw[1] + c[2].color * bw[2],
         }
     }

@@ -16,7 +16,7 @@
 use glam::Vec3;
 use obvhs::triangle::Triangle;
 use obvhs::{BvhBuildParams, bvh2::Bvh2};
-use wide::{CmpGe, CmpGt, CmpLe, CmpNe, f32x4, f32x8};
+use wide::{CmpGe, CmpGt, CmpLe, f32x4, f32x8};
 
 /// A child reference: an inner node's index, or `LEAF | first_block << 2 | (blocks − 1)`.
 const LEAF: u32 = 1 << 31;
@@ -102,7 +102,7 @@ pub struct Bvh8 {
 
 /// Nodes kept on a traversal's stack before it spills onto the heap (a tree this deep is
 /// pathological; the spill keeps it correct).
-const STACK: usize = 256;
+const STACK: usize = 32;
 
 /// A traversal stack of (child reference, entry distance).
 struct Stack {
@@ -155,20 +155,27 @@ impl BoxRay {
     #[inline(always)]
     fn new(o: Vec3, d: Vec3) -> BoxRay {
         // A zero component would give 0 · ∞ = NaN in the slab test: keep it tiny instead.
-        let inv = d.to_array().map(|c| {
-            let c = if c.abs() < 1e-30 {
-                1e-30f32.copysign(c)
+        // (Written out per axis: array `map`s were left as calls in the hot path.)
+        let inv_of = |c: f32| {
+            if c.abs() < 1e-30 {
+                1.0 / 1e-30f32.copysign(c)
             } else {
-                c
-            };
-            1.0 / c
-        });
-        let near = [0, 1, 2].map(|a| if inv[a] >= 0.0 { a } else { a + 3 });
+                1.0 / c
+            }
+        };
+        let inv = Vec3::new(inv_of(d.x), inv_of(d.y), inv_of(d.z));
+        let oi = o * inv;
+        let near_of = |a: usize| if inv[a] >= 0.0 { a } else { a + 3 };
+        let near = [near_of(0), near_of(1), near_of(2)];
         BoxRay {
-            o_inv: [0, 1, 2].map(|a| f32x8::splat(o[a] * inv[a])),
-            inv: inv.map(f32x8::splat),
+            o_inv: [f32x8::splat(oi.x), f32x8::splat(oi.y), f32x8::splat(oi.z)],
+            inv: [
+                f32x8::splat(inv.x),
+                f32x8::splat(inv.y),
+                f32x8::splat(inv.z),
+            ],
             near,
-            far: near.map(|n| (n + 3) % 6),
+            far: [(near[0] + 3) % 6, (near[1] + 3) % 6, (near[2] + 3) % 6],
         }
     }
 
@@ -203,8 +210,8 @@ impl TriRay {
     #[inline(always)]
     fn new(o: Vec3, d: Vec3) -> TriRay {
         TriRay {
-            o: [0, 1, 2].map(|a| f32x4::splat(o[a])),
-            d: [0, 1, 2].map(|a| f32x4::splat(d[a])),
+            o: [f32x4::splat(o.x), f32x4::splat(o.y), f32x4::splat(o.z)],
+            d: [f32x4::splat(d.x), f32x4::splat(d.y), f32x4::splat(d.z)],
         }
     }
 
@@ -213,22 +220,31 @@ impl TriRay {
     fn test(&self, tri: &Tri4, tmin: f32, tmax: f32) -> f32x4 {
         let [dx, dy, dz] = self.d;
         let det = tri.ng[0] * dx + tri.ng[1] * dy + tri.ng[2] * dz;
-        let c = [0, 1, 2].map(|a| tri.v0[a] - self.o[a]);
+        let c = [
+            tri.v0[0] - self.o[0],
+            tri.v0[1] - self.o[1],
+            tri.v0[2] - self.o[2],
+        ];
         let r = [
             dy * c[2] - dz * c[1],
             dz * c[0] - dx * c[2],
             dx * c[1] - dy * c[0],
         ];
-        let inv = f32x4::ONE / det;
-        let u = (r[0] * tri.e2[0] + r[1] * tri.e2[1] + r[2] * tri.e2[2]) * inv;
-        let v = (r[0] * tri.e1[0] + r[1] * tri.e1[1] + r[2] * tri.e1[2]) * inv;
-        let t = (tri.ng[0] * c[0] + tri.ng[1] * c[1] + tri.ng[2] * c[2]) * inv;
-        let hit = det.cmp_ne(f32x4::ZERO)
+        // Barycentrics and distance scaled by |det| (the sign folded in), so that the division
+        // waits until some lane is hit.
+        let sign = det & f32x4::splat(-0.0);
+        let abs_det = det ^ sign;
+        let u = (r[0] * tri.e2[0] + r[1] * tri.e2[1] + r[2] * tri.e2[2]) ^ sign;
+        let v = (r[0] * tri.e1[0] + r[1] * tri.e1[1] + r[2] * tri.e1[2]) ^ sign;
+        let hit = abs_det.cmp_gt(f32x4::ZERO)
             & u.cmp_ge(f32x4::ZERO)
             & v.cmp_ge(f32x4::ZERO)
-            & (u + v).cmp_le(f32x4::ONE)
-            & t.cmp_gt(f32x4::splat(tmin))
-            & t.cmp_le(f32x4::splat(tmax));
+            & (u + v).cmp_le(abs_det);
+        if hit.none() {
+            return f32x4::splat(f32::INFINITY);
+        }
+        let t = ((tri.ng[0] * c[0] + tri.ng[1] * c[1] + tri.ng[2] * c[2]) ^ sign) / abs_det;
+        let hit = hit & t.cmp_gt(f32x4::splat(tmin)) & t.cmp_le(f32x4::splat(tmax));
         hit.blend(t, f32x4::splat(f32::INFINITY))
     }
 }
@@ -273,49 +289,54 @@ impl Bvh8 {
         bvh
     }
 
-    /// Turn the binary tree into 8-wide nodes, depth first (a node's subtree follows it).
+    /// Turn the binary tree into 8-wide nodes. A node's inner children are laid out next to
+    /// each other (and its leaves' blocks likewise), subtrees depth first after them.
     fn collapse(&mut self, b2: &Bvh2, tris: &[Triangle], alpha: &impl Fn(usize) -> bool) {
-        // (binary node, 8-wide parent, lane in the parent); the root has no parent.
-        let mut work: Vec<(usize, usize, usize)> = vec![(0, usize::MAX, 0)];
-        while let Some((n, parent, lane)) = work.pop() {
-            let node = &b2.nodes[n];
-            let reference = if node.prim_count > 0 && parent != usize::MAX {
-                self.leaf(b2, n, tris, alpha)
-            } else {
-                let me = self.nodes.len();
-                self.nodes.push(Node8::empty());
-                let mut kids = if node.prim_count > 0 {
-                    vec![n]
+        // (binary node, the 8-wide node made of it, allocated already).
+        self.nodes.push(Node8::empty());
+        let mut work: Vec<(usize, usize)> = vec![(0, 0)];
+        while let Some((n, me)) = work.pop() {
+            let kids = Self::open(b2, n);
+            let mut inner = vec![];
+            for (l, &k) in kids.iter().enumerate() {
+                let a = &b2.nodes[k].aabb;
+                let reference = if b2.nodes[k].prim_count > 0 {
+                    self.leaf(b2, k, tris, alpha)
                 } else {
-                    vec![node.first_index as usize, node.first_index as usize + 1]
+                    self.nodes.push(Node8::empty());
+                    inner.push((k, self.nodes.len() - 1));
+                    (self.nodes.len() - 1) as u32
                 };
-                while kids.len() < 8 {
-                    let widest = kids
-                        .iter()
-                        .enumerate()
-                        .filter(|&(_, &k)| b2.nodes[k].prim_count == 0)
-                        .max_by(|a, b| {
-                            let area = |k: usize| b2.nodes[k].aabb.half_area();
-                            area(*a.1).total_cmp(&area(*b.1))
-                        })
-                        .map(|(i, _)| i);
-                    let Some(i) = widest else { break };
-                    let k = kids.swap_remove(i);
-                    let first = b2.nodes[k].first_index as usize;
-                    kids.extend([first, first + 1]);
-                }
-                // Children in reverse onto the work stack, so the first is laid out next.
-                for (l, &k) in kids.iter().enumerate().rev() {
-                    let a = &b2.nodes[k].aabb;
-                    self.nodes[me].set(l, a.min.into(), a.max.into(), EMPTY);
-                    work.push((k, me, l));
-                }
-                me as u32
-            };
-            if parent != usize::MAX {
-                self.nodes[parent].child[lane] = reference;
+                self.nodes[me].set(l, a.min.into(), a.max.into(), reference);
             }
+            // In reverse, so that the first child's subtree is laid out first.
+            work.extend(inner.into_iter().rev());
         }
+    }
+
+    /// The up to eight binary nodes that become the children of the 8-wide node made of `n`:
+    /// `n`'s children, then repeatedly the inner one of largest surface area replaced by its
+    /// two children. A leaf root is its own only child.
+    fn open(b2: &Bvh2, n: usize) -> Vec<usize> {
+        let node = &b2.nodes[n];
+        if node.prim_count > 0 {
+            return vec![n];
+        }
+        let mut kids = vec![node.first_index as usize, node.first_index as usize + 1];
+        while kids.len() < 8 {
+            let area = |k: usize| b2.nodes[k].aabb.half_area();
+            let widest = kids
+                .iter()
+                .enumerate()
+                .filter(|&(_, &k)| b2.nodes[k].prim_count == 0)
+                .max_by(|a, b| area(*a.1).total_cmp(&area(*b.1)))
+                .map(|(i, _)| i);
+            let Some(i) = widest else { break };
+            let k = kids.swap_remove(i);
+            let first = b2.nodes[k].first_index as usize;
+            kids.extend([first, first + 1]);
+        }
+        kids
     }
 
     /// A leaf's triangles as blocks of four; its child reference.
@@ -504,10 +525,14 @@ mod tests {
             let q = s.cross(e1);
             let v = d.dot(q) / det;
             let t = e2.dot(q) / det;
-            if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t <= tmax {
-                if best.is_none_or(|(_, bt)| t < bt) {
-                    best = Some((i, t));
-                }
+            if u >= 0.0
+                && v >= 0.0
+                && u + v <= 1.0
+                && t > 0.0
+                && t <= tmax
+                && best.is_none_or(|(_, bt)| t < bt)
+            {
+                best = Some((i, t));
             }
         }
         best
