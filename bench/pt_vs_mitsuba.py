@@ -101,11 +101,12 @@ def main():
 
 
 def find_libllvm():
-    """libLLVM 16 or newer for Dr.Jit's LLVM backend: DRJIT_LIBLLVM_PATH, or the newest under /usr/lib."""
+    """libLLVM 16 or newer for Dr.Jit's LLVM backend: DRJIT_LIBLLVM_PATH, or the newest in Debian's
+    library folders."""
     if os.environ.get("DRJIT_LIBLLVM_PATH"):
         return os.environ["DRJIT_LIBLLVM_PATH"]
     found = []
-    for path in glob.glob("/usr/lib/**/libLLVM*.so*", recursive=True):
+    for path in glob.glob("/usr/lib/*/libLLVM*.so*") + glob.glob("/usr/lib/llvm-*/lib/libLLVM*.so*"):
         digits = "".join(c if c.isdigit() else " " for c in os.path.basename(path)).split()
         if digits and int(digits[0]) >= 16:
             found.append((int(digits[0]), path))

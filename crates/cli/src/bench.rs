@@ -339,7 +339,7 @@ fn bench_trace(
     println!(
         "scene {} ({} triangles), BVH build {:.3} s",
         s.name,
-        accel.triangle_count(),
+        s.triangle_count(),
         build
     );
     println!(
@@ -355,7 +355,7 @@ fn bench_trace(
             "{}",
             serde_json::json!({
                 "alpha_test": !opaque,
-                "scene": s.name, "triangles": accel.triangle_count(), "build_s": build, "rays": n,
+                "scene": s.name, "triangles": s.triangle_count(), "build_s": build, "rays": n,
                 "threads": all,
                 "coherent_mrays_1t": c1, "coherent_mrays_mt": cn,
                 "incoherent_mrays_1t": i1, "incoherent_mrays_mt": i_n,

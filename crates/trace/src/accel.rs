@@ -241,7 +241,9 @@ impl Accel {
         [t.v0.into(), (t.v0 - t.e1).into(), (t.v0 + t.e2).into()]
     }
 
-    pub fn triangle_count(&self) -> usize {
+    /// BVH slots: the scene's triangles, those that pre-splits put in several leaves once
+    /// per leaf, and the unused lanes of leaf blocks.
+    pub fn slot_count(&self) -> usize {
         self.tris.len()
     }
 
