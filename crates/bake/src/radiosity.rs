@@ -431,13 +431,11 @@ pub fn solve(
                 } else {
                     None
                 };
-                b.members
-                    .iter()
-                    .filter_map(move |&j| match vis {
-                        Some(false) => None,
-                        v => shoot_one(j as usize, v.map(|_| true)),
-                    })
-                    .collect::<Vec<_>>()
+                let shoot_one = &shoot_one;
+                b.members.iter().filter_map(move |&j| match vis {
+                    Some(false) => None,
+                    v => shoot_one(j as usize, v.map(|_| true)),
+                })
             })
             .collect();
         stats.transfers += np as u64;
