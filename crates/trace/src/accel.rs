@@ -241,12 +241,6 @@ impl Accel {
         [t.v0.into(), (t.v0 - t.e1).into(), (t.v0 + t.e2).into()]
     }
 
-    /// BVH slots: the scene's triangles, those that pre-splits put in several leaves once
-    /// per leaf, and the unused lanes of leaf blocks.
-    pub fn slot_count(&self) -> usize {
-        self.tris.len()
-    }
-
     /// Whether the ray passes through the alpha-tested hole of BVH primitive `slot` at the
     /// intersection found with `ray`.
     #[inline]

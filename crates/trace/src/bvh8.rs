@@ -371,11 +371,6 @@ impl Bvh8 {
         LEAF | (block0 as u32) << 2 | (blocks - 1)
     }
 
-    /// Slots in all (four per block; some unused).
-    pub fn slots(&self) -> usize {
-        self.slot_triangle.len()
-    }
-
     /// The closest hit along `o + t·d`, t ∈ (tmin, tmax]: (slot, t). `reject(slot, t)` is
     /// asked for the triangles built with the alpha test: true lets the ray through.
     #[inline]
