@@ -1242,6 +1242,11 @@ pub struct LpvArgs {
     /// (Kaplanyan & Dachsbacher's original, more diffusive).
     #[arg(long, default_value = "central")]
     pub lpv_reemit: Reemit,
+    /// `lpv`: the sky's diffuse light enters the volume as this many directional RSM views
+    /// (the environment split into cells around evenly spread directions), so that its bounce
+    /// is shadowed like the sun's; 0 injects no sky light (at most 24 views in all).
+    #[arg(long, default_value_t = lightlab_gpu::lpv::DEFAULT_SKY_LIGHTS)]
+    pub lpv_sky_lights: u32,
     /// What to show: the final frame, the volume's indirect light only, or a layer.
     #[arg(long, value_enum, default_value_t = DebugView::Final)]
     pub debug_view: DebugView,
@@ -1258,6 +1263,7 @@ impl Default for LpvArgs {
             lpv_cascades: 1,
             no_lpv_snap: false,
             lpv_reemit: Reemit::Central,
+            lpv_sky_lights: lightlab_gpu::lpv::DEFAULT_SKY_LIGHTS,
             debug_view: DebugView::Final,
         }
     }
@@ -1281,6 +1287,8 @@ impl LpvArgs {
             cascades: self.lpv_cascades,
             snap: !self.no_lpv_snap,
             reemit: self.lpv_reemit,
+            // The report lights its volume with the sun only (its sky is a composite term).
+            sky_lights: if faithful { 0 } else { self.lpv_sky_lights },
             ..Default::default()
         };
         s.validate()?;

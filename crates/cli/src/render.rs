@@ -37,8 +37,9 @@ pub struct RenderArgs {
     /// mirrors from the mirrored eye (`--planar-mirrors`). The light-map and SH techniques read
     /// `--baked DIR` or bake first.
     /// The sky's diffuse light: traced (reference, direct); SH irradiance occluded through
-    /// shadow-mapped sky directions (the Phong and LPV techniques, `--sky-occlusion`); baked
-    /// (lightmap, lightmap+phong); in the SH transfer (prt-*, shl*).
+    /// shadow-mapped sky directions (the Phong and LPV techniques, `--sky-occlusion`), and
+    /// its bounce injected into `lpv`'s volume (`--lpv-sky-lights`); baked (lightmap,
+    /// lightmap+phong); in the SH transfer (prt-*, shl*).
     #[arg(long, default_value = "reference")]
     pub technique: Technique,
     #[arg(long, default_value_t = 256)]

@@ -59,7 +59,8 @@ impl Family {
             Family::Lightmap => "baked into the light-map, occluded and bounced by the bake",
             Family::Sh => "SH transfer: shadowed (and inter-reflected) by the bake",
             Family::Lpv => {
-                "SH irradiance occluded as the Phong techniques'; the volume adds the lights' bounce"
+                "SH irradiance occluded as the Phong techniques'; the volume adds the bounce of \
+                 the lights and of the sky (lpv: 16 directional views, --lpv-sky-lights)"
             }
             Family::Debug => "none",
         }

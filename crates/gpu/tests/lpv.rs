@@ -41,7 +41,14 @@ fn cpu_volume(
 ) -> Volume {
     let l = r.lpv().unwrap();
     let grid = l.grids[cascade];
-    let light = rsm_lights(scene, None, l.grids.last().unwrap(), l.settings.rsm_size)[0].0;
+    let light = rsm_lights(
+        scene,
+        None,
+        &[],
+        l.grids.last().unwrap(),
+        l.settings.rsm_size,
+    )[0]
+    .0;
     let eye = Vec3::from_array(light.eye);
     let mut vpls = Vec::new();
     let mut surfels = Vec::new();
@@ -446,6 +453,73 @@ fn a_point_light_in_a_closed_box_injects_all_its_reflected_flux() {
         ((flux - Vec3::splat(want)) / want).abs().max_element() < 0.01,
         "{flux} vs {want}"
     );
+}
+
+#[test]
+fn the_sky_enters_the_volume_as_directional_views() {
+    // A closed box of albedo ½ under a uniform sky of radiance L (the constant ambient): each of
+    // the sky's cells is a directional view of irradiance E⊥_k (Σ E⊥_k = 4πL) that sees the
+    // box's projected area 4·(|x| + |y| + |z|) along its direction ω_k, so the injected flux is
+    // ½ · Σ E⊥_k · 4·(|x_k| + |y_k| + |z_k|) (12πL for a continuous sky), at a quarter of the
+    // RSM's side.
+    let Some(ctx) = test_context() else { return };
+    let mut scene = Scene::default();
+    let m = scene.add_material(lightlab_scene::Material::diffuse("wall", Vec3::splat(0.5)));
+    let mesh = lightlab_scene::builtin::geom::aabb_box("box", Vec3::ZERO, Vec3::splat(2.0), m);
+    scene.add_mesh(mesh, glam::Mat4::IDENTITY);
+    scene.cameras.push(lightlab_scene::Camera::look_at(
+        "outside",
+        Vec3::new(5.0, 4.0, 6.0),
+        Vec3::splat(1.0),
+        Vec3::Y,
+        0.8,
+    ));
+    let radiance = Vec3::new(0.6, 0.8, 1.0);
+    let s = LpvSettings {
+        grid: 16,
+        rsm_size: 512,
+        iterations: Some(0),
+        occlusion: false,
+        sky_lights: 16,
+        ..Default::default()
+    };
+    let rs = RasterSettings {
+        width: 64,
+        height: 64,
+        shadows: ShadowMethod::None,
+        ambient: Ambient::Constant(radiance),
+        ..Default::default()
+    };
+    let mut r = Renderer::with_lpv(&ctx, &scene, rs, &s, true).unwrap();
+    r.render(&ctx);
+    assert_eq!(r.lpv().unwrap().light_count(), 16);
+    let flux = r.lpv().unwrap().read_volume(&ctx, 0).unwrap().total_flux();
+    let uniform = lightlab_core::image::Image::from_fn(64, 32, |_, _| radiance);
+    let cells = lightlab_gpu::raster::sky_lights(&uniform, 1.0, 16);
+    let want: Vec3 = cells
+        .iter()
+        .map(|(d, e)| 0.5 * *e * 4.0 * (d.x.abs() + d.y.abs() + d.z.abs()))
+        .sum();
+    let continuous = 12.0 * std::f32::consts::PI * radiance;
+    eprintln!("sky on a box: injected flux {flux}, expected {want} (continuous sky {continuous})");
+    assert!(
+        ((flux - want) / want).abs().max_element() < 0.01,
+        "{flux} vs {want}"
+    );
+    assert!(((want - continuous) / continuous).abs().max_element() < 0.05);
+    // Without sky lights the volume is dark.
+    let none = LpvSettings { sky_lights: 0, ..s };
+    let rs = RasterSettings {
+        width: 64,
+        height: 64,
+        shadows: ShadowMethod::None,
+        ambient: Ambient::Constant(radiance),
+        ..Default::default()
+    };
+    let mut r = Renderer::with_lpv(&ctx, &scene, rs, &none, true).unwrap();
+    r.render(&ctx);
+    let dark = r.lpv().unwrap().read_volume(&ctx, 0).unwrap().total_flux();
+    assert_eq!(dark, Vec3::ZERO);
 }
 
 #[test]

@@ -88,6 +88,10 @@ pub struct LpvSettings {
     /// `Central` (default) keeps its direction, `FaceNormal` is Kaplanyan & Dachsbacher's
     /// original (see `lightlab_core::lpv::Reemit`).
     pub reemit: lpv::Reemit,
+    /// The sky's light injected as this many directional RSM views (the environment split into
+    /// cells, `raster::ambient::sky::sky_lights`), so that the volume carries the bounce of sky
+    /// light, occluded as the sun's is; 0 = none (the sky then lights only directly).
+    pub sky_lights: u32,
 }
 
 impl Default for LpvSettings {
@@ -106,6 +110,7 @@ impl Default for LpvSettings {
             camera_blockers: true,
             anchor: None,
             reemit: lpv::Reemit::Central,
+            sky_lights: DEFAULT_SKY_LIGHTS,
         }
     }
 }
@@ -157,6 +162,12 @@ impl LpvSettings {
             return Err(format!(
                 "LPV damping {} must be within 0..=8 cells",
                 self.damping
+            ));
+        }
+        if self.sky_lights as usize > MAX_RSM_LIGHTS {
+            return Err(format!(
+                "LPV sky lights {} must be at most {MAX_RSM_LIGHTS} (RSM views)",
+                self.sky_lights
             ));
         }
         if !(1..=4).contains(&self.cascades) {
@@ -248,8 +259,12 @@ pub struct RsmLight {
     pub cos_outer: f32,
     /// Kind 4: the layer of its candela table (`photometric.rs`), its C0 axis and nadir.
     pub profile: u32,
-    pub pad1: f32,
-    pub pad2: f32,
+    /// 1: a cell of the sky ([`LpvSettings::sky_lights`]): its surfels light but do not
+    /// block (the scene's lights and the camera see the surfaces that matter, and blockers
+    /// of several views add up).
+    pub sky: u32,
+    /// The side of the RSM this view renders (its viewport's, from the top-left corner).
+    pub size: u32,
     pub c0: [f32; 3],
     pub pad3: f32,
     pub nadir: [f32; 3],
@@ -280,6 +295,8 @@ fn profile_texture(ctx: &GpuContext, scene: &Scene) -> wgpu::TextureView {
 
 /// Half-angle of the frustum an emissive instance is seen through.
 const AREA_HALF_ANGLE: f32 = 75.0 * std::f32::consts::PI / 180.0;
+/// Sky directions injected by default ([`LpvSettings::sky_lights`]).
+pub const DEFAULT_SKY_LIGHTS: u32 = 16;
 /// At most this many RSM views (the first ones of the scene; a point light takes six).
 pub const MAX_RSM_LIGHTS: usize = 24;
 
@@ -289,6 +306,7 @@ pub const MAX_RSM_LIGHTS: usize = 24;
 pub fn rsm_lights(
     scene: &Scene,
     extra: Option<&lightlab_scene::Light>,
+    sky: &[(Vec3, Vec3)],
     grid: &Grid,
     size: u32,
 ) -> Vec<(RsmLight, f32)> {
@@ -311,24 +329,7 @@ pub fn rsm_lights(
         };
         match &l.kind {
             LightKind::Directional { .. } => {
-                let d = l.direction.normalize();
-                let eye = centre - d * (radius * 1.01);
-                let view = look_to_mat4(eye, d, up_for(d));
-                let proj =
-                    directx::orthographic(-radius, radius, -radius, radius, 0.0, 2.02 * radius);
-                let texel = (2.0 * radius / size as f32).powi(2);
-                out.push((
-                    RsmLight {
-                        view_proj: (proj * view).to_cols_array_2d(),
-                        eye: eye.to_array(),
-                        kind: 0,
-                        axis: d.to_array(),
-                        texel,
-                        color: colour.to_array(),
-                        ..Default::default()
-                    },
-                    colour.max_element() * 4.0 * radius * radius,
-                ));
+                out.push(directional_view(l.direction, colour, centre, radius, size));
             }
             LightKind::Spot {
                 inner_cone,
@@ -399,13 +400,49 @@ pub fn rsm_lights(
                 axis: n.to_array(),
                 texel,
                 color: colour.to_array(),
+                size,
                 ..Default::default()
             },
             colour.max_element() * std::f32::consts::PI,
         ));
     }
+    // The sky's cells last: the scene's own lights keep their views when there are too many.
+    // Sky light is smooth: a quarter of the side (a sixteenth of the texels) per cell.
+    let sky_size = (size / 4).max(64).min(size);
+    for (towards, e) in sky {
+        let (light, bound) = directional_view(-*towards, *e, centre, radius, sky_size);
+        out.push((RsmLight { sky: 1, ..light }, bound));
+    }
     out.truncate(MAX_RSM_LIGHTS);
     out
+}
+
+/// A directional light travelling along `d` with irradiance `colour` on a surface facing it:
+/// an orthographic view over the sphere (centre, radius), and its flux bound.
+fn directional_view(
+    d: Vec3,
+    colour: Vec3,
+    centre: Vec3,
+    radius: f32,
+    size: u32,
+) -> (RsmLight, f32) {
+    let d = d.normalize();
+    let up = if d.y.abs() > 0.99 { Vec3::X } else { Vec3::Y };
+    let eye = centre - d * (radius * 1.01);
+    let view = look_to_mat4(eye, d, up);
+    let proj = directx::orthographic(-radius, radius, -radius, radius, 0.0, 2.02 * radius);
+    let texel = (2.0 * radius / size as f32).powi(2);
+    let light = RsmLight {
+        view_proj: (proj * view).to_cols_array_2d(),
+        eye: eye.to_array(),
+        kind: 0,
+        axis: d.to_array(),
+        texel,
+        color: colour.to_array(),
+        size,
+        ..Default::default()
+    };
+    (light, colour.max_element() * 4.0 * radius * radius)
 }
 
 /// The camera as an RSM view without light (kind 3): a square frustum covering its field of
@@ -442,6 +479,7 @@ fn square_view(eye: Vec3, d: Vec3, up: Vec3, half: f32, far: f32, size: u32) -> 
         eye: eye.to_array(),
         axis: d.to_array(),
         texel: (2.0 * half.tan() / size as f32).powi(2),
+        size,
         ..Default::default()
     }
 }
@@ -477,7 +515,8 @@ pub struct Lpv {
     pub settings: LpvSettings,
     /// The cascades' grids, finest first; the last is fitted around the scene.
     pub grids: Vec<Grid>,
-    lights: usize,
+    /// Each RSM view's side (its viewport), in the order they are rendered.
+    light_sizes: Vec<u32>,
     rsm_pipeline: wgpu::RenderPipeline,
     rsm_group: wgpu::BindGroup,
     rsm_views: Vec<wgpu::TextureView>,
@@ -492,17 +531,26 @@ pub struct Lpv {
     pub textures: [wgpu::Texture; 3],
 }
 
+/// The environment's light the volume injects besides the scene's lights.
+#[derive(Clone, Copy, Default)]
+pub struct EnvLights<'a> {
+    /// The environment's sun taken out as a directional light.
+    pub sun: Option<&'a lightlab_scene::Light>,
+    /// The environment's diffuse light as directional lights, (unit direction towards the sky,
+    /// E⊥) each ([`LpvSettings::sky_lights`]).
+    pub sky: &'a [(Vec3, Vec3)],
+}
+
 /// Bytes of one cell's 12 floats.
 const CELL_BYTES: u64 = 48;
 
 impl Lpv {
     /// The volumes for `camera` (where the cascades go, and whose view adds blockers) with an
-    /// image of `aspect` = width/height, lit by the scene's lights and `sun` (the environment's
-    /// sun taken out as a directional light).
+    /// image of `aspect` = width/height, lit by the scene's lights and the environment's.
     pub fn new(
         ctx: &GpuContext,
         scene: &Scene,
-        sun: Option<&lightlab_scene::Light>,
+        env: EnvLights,
         settings: LpvSettings,
         camera: &lightlab_scene::Camera,
         aspect: f32,
@@ -518,13 +566,17 @@ impl Lpv {
         let grids = settings.grids_for(scene, eye, forward);
         let grid = *grids.last().expect("at least one cascade");
         let size = settings.rsm_size;
-        let mut lights = rsm_lights(scene, sun, &grid, size);
+        let mut lights = rsm_lights(scene, env.sun, env.sky, &grid, size);
+        // The sky's cells first, so that the last view rendered (the RSM textures' content,
+        // for the debug views) is a light's at the full size.
+        lights.sort_by_key(|l| l.0.sky == 0);
         let bound = lights.iter().map(|l| l.1).sum::<f32>().max(1e-12);
         if settings.occlusion && settings.camera_blockers && settings.scheme == LpvScheme::Kaplanyan
         {
             // First, so that the last view rendered (the RSM textures' content) is a light's.
             lights.insert(0, (camera_view(camera, aspect, &grid, size), 0.0));
         }
+        let light_sizes = lights.iter().map(|l| l.0.size).collect();
         let uniform_bytes = setup::uniform_slots(&settings, &grids, bound, wind);
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lpv uniforms"),
@@ -559,7 +611,7 @@ impl Lpv {
         Ok(Lpv {
             settings,
             grids,
-            lights: lights.len(),
+            light_sizes,
             rsm_pipeline,
             rsm_group,
             rsm_views,
@@ -599,7 +651,7 @@ impl Lpv {
 
     /// Number of RSM lights (directional, spot, emissive instances).
     pub fn light_count(&self) -> usize {
-        self.lights
+        self.light_sizes.len()
     }
 
     /// The RSM textures (flux, normal, position) of the last light rendered.
@@ -635,7 +687,6 @@ impl Lpv {
         let n = self.grids[0].n;
         let wg3 = n.div_ceil(4);
         let wg_gv = (n + 1).div_ceil(4);
-        let wg_rsm = self.settings.rsm_size.div_ceil(8);
         let wpi = self.settings.scheme == LpvScheme::Wpi;
         for c in &self.cascades {
             enc.clear_buffer(&c.lpv_atomic, 0, None);
@@ -654,8 +705,9 @@ impl Lpv {
                 end_of_pass_write_index: Some(e),
             })
         };
-        for li in 0..self.lights {
+        for (li, &size) in self.light_sizes.iter().enumerate() {
             let light_offset = (li as u64 * SLOT) as u32;
+            let wg_rsm = size.div_ceil(8);
             {
                 let t = ts("lpv rsm");
                 let color = |v| {
@@ -692,6 +744,7 @@ impl Lpv {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
+                pass.set_viewport(0.0, 0.0, size as f32, size as f32, 0.0, 1.0);
                 pass.set_pipeline(&self.rsm_pipeline);
                 pass.set_bind_group(0, &self.rsm_group, &[0, light_offset]);
                 pass.set_vertex_buffer(0, scene.vertices.slice(..));
@@ -823,7 +876,7 @@ mod tests {
             "RsmLight",
             &rust_layout!(
                 RsmLight, view_proj, eye, kind, axis, texel, color, cos_inner, cos_outer, profile,
-                pad1, pad2, c0, pad3, nadir, pad4
+                sky, size, c0, pad3, nadir, pad4
             ),
         )
         .unwrap();

@@ -144,19 +144,32 @@ fn sky_occlusion(
     gscene: &GpuScene,
     sun: Option<&lightlab_core::sh_env::EnvSun>,
 ) -> super::ambient::SkyOcclusion {
-    let uniform;
-    let env = match s.ambient {
-        Ambient::None => None,
-        Ambient::Constant(c) => {
-            uniform = lightlab_core::image::Image::from_fn(64, 32, |_, _| c);
-            Some((&uniform, 1.0))
-        }
-        Ambient::Environment => scene
-            .environment
-            .as_ref()
-            .map(|e| (sun.map_or(&e.image, |s| &s.remainder), e.intensity)),
-    };
+    let env = sky_radiance(scene, s, sun);
+    let env = env.as_ref().map(|(img, k)| (img.as_ref(), *k));
     super::ambient::SkyOcclusion::new(ctx, gscene, env, s.sky_occlusion)
+}
+
+/// The sky's diffuse light as a lat-long image and its scale: the environment without the sun
+/// taken out of it, or a constant ambient's uniform sky; None without ambient light.
+fn sky_radiance<'a>(
+    scene: &'a Scene,
+    s: &RasterSettings,
+    sun: Option<&'a lightlab_core::sh_env::EnvSun>,
+) -> Option<(std::borrow::Cow<'a, lightlab_core::image::Image>, f32)> {
+    use std::borrow::Cow;
+    match s.ambient {
+        Ambient::None => None,
+        Ambient::Constant(c) => Some((
+            Cow::Owned(lightlab_core::image::Image::from_fn(64, 32, |_, _| c)),
+            1.0,
+        )),
+        Ambient::Environment => scene.environment.as_ref().map(|e| {
+            (
+                Cow::Borrowed(sun.map_or(&e.image, |s| &s.remainder)),
+                e.intensity,
+            )
+        }),
+    }
 }
 
 /// The frame uniforms: camera, shadow settings and the sky's SH irradiance.
@@ -433,7 +446,15 @@ impl Renderer {
                 }
                 let aspect = s.width as f32 / s.height as f32;
                 let sun_light = sun.as_ref().map(|(l, _)| l);
-                let v = Lpv::new(ctx, scene, sun_light, l.clone(), &camera, aspect, &s.wind)?;
+                let sky_lights = sky_radiance(scene, s, sun.as_ref().map(|(_, e)| e))
+                    .map_or(vec![], |(img, k)| {
+                        super::ambient::sky_lights(&img, k, l.sky_lights)
+                    });
+                let env = crate::lpv::EnvLights {
+                    sun: sun_light,
+                    sky: &sky_lights,
+                };
+                let v = Lpv::new(ctx, scene, env, l.clone(), &camera, aspect, &s.wind)?;
                 let sky = sky_occlusion(ctx, scene, s, &gscene, sun.as_ref().map(|(_, e)| e));
                 AmbientSource::lpv(ctx, v, sky, indirect_only)
             }

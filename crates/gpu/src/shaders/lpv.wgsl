@@ -62,8 +62,10 @@ struct RsmLight {
     cos_outer: f32,
     // Kind 4 (a cube face of a goniometric light): its candela table's layer, C0 axis, nadir.
     profile: u32,
-    pad1: f32,
-    pad2: f32,
+    // 1: a cell of the sky, whose surfels light but do not block.
+    sky: u32,
+    // The side of the RSM this view renders (from the top-left corner).
+    size: u32,
     c0: vec3<f32>,
     pad3: f32,
     nadir: vec3<f32>,
@@ -203,7 +205,7 @@ fn inject_vpl(p: vec3<f32>, n: vec3<f32>, flux: vec3<f32>) {
 // a blocker of the geometry volume.
 @compute @workgroup_size(8, 8, 1)
 fn inject_cs(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= lpv.rsm_size || id.y >= lpv.rsm_size {
+    if id.x >= light.size || id.y >= light.size {
         return;
     }
     let t = vec2<i32>(id.xy);
@@ -226,7 +228,7 @@ fn inject_cs(@builtin(global_invocation_id) id: vec3<u32>) {
     if tr > 0.0 {
         inject_vpl(pos.xyz, -n, flux * tr);
     }
-    if lpv.occlusion == 1u {
+    if lpv.occlusion == 1u && light.sky == 0u {
         inject_blocker(pos.xyz, n, pos.w);
     }
 }

@@ -87,6 +87,36 @@ pub fn cell_irradiance(env: &Image, scale: f32, dirs: &[Vec3]) -> Vec<[Vec3; 9]>
         .collect()
 }
 
+/// The environment (lat-long, × `scale`) as up to `n` directional lights, for the LPV's
+/// injection of sky light (issue 22): the sphere split into the cells of `n` spherical Fibonacci
+/// directions (each texel to its nearest), each cell a light from its flux-weighted mean
+/// direction whose irradiance on a surface facing it is the cell's radiance integrated over its
+/// solid angle (E⊥ = Σ L·ΔΩ, RGB). Returned as (unit direction towards the sky, E⊥); cells
+/// without light are left out. Their E⊥ sum to the environment's ∫ L dω.
+pub fn sky_lights(env: &Image, scale: f32, n: u32) -> Vec<(Vec3, Vec3)> {
+    let dirs = fibonacci_directions(n);
+    if dirs.is_empty() {
+        return vec![];
+    }
+    let mut flux = vec![glam::DVec3::ZERO; dirs.len()];
+    let mut mean = vec![glam::DVec3::ZERO; dirs.len()];
+    for_each_texel(env, EnvFormat::LatLong, |d, omega, v| {
+        let df = d.as_vec3();
+        let k = (0..dirs.len())
+            .max_by(|&a, &b| dirs[a].dot(df).total_cmp(&dirs[b].dot(df)))
+            .unwrap_or(0);
+        let e = v.as_dvec3() * (omega * scale as f64);
+        flux[k] += e;
+        mean[k] += d * (e.x + e.y + e.z);
+    });
+    flux.iter()
+        .zip(&mean)
+        .zip(&dirs)
+        .filter(|((f, _), _)| f.max_element() > 0.0)
+        .map(|((f, m), d)| (m.as_vec3().try_normalize().unwrap_or(*d), f.as_vec3()))
+        .collect()
+}
+
 /// An orthographic view-projection looking along −`dir` at a sphere (centre, radius), depth
 /// 0..1 over the sphere's extent.
 fn view_proj(dir: Vec3, centre: Vec3, radius: f32) -> Mat4 {
@@ -344,5 +374,27 @@ mod tests {
             );
         }
         assert!(cell_irradiance(&flat, 1.0, &[]).is_empty());
+        // As lights: E⊥ sums to ∫ L dω (4π for a uniform unit sky), each cell about 4π/16,
+        // each direction near its own cell's.
+        let lights = sky_lights(&flat, 2.0, 16);
+        assert_eq!(lights.len(), 16);
+        let total: Vec3 = lights.iter().map(|l| l.1).sum();
+        assert!(
+            (total.x - 8.0 * std::f32::consts::PI).abs() < 1e-3 * total.x,
+            "{total}"
+        );
+        for ((d, e), f) in lights.iter().zip(fibonacci_directions(16)) {
+            assert!(
+                (d.length() - 1.0).abs() < 1e-4 && d.dot(f) > 0.9,
+                "{d} vs {f}"
+            );
+            assert!((e.x - total.x / 16.0).abs() < 0.2 * total.x / 16.0);
+        }
+        // A sky lit only above the horizon has no cells below it.
+        let upper = Image::from_fn(128, 64, |_, y| Vec3::splat((y < 32) as u8 as f32));
+        let lights = sky_lights(&upper, 1.0, 16);
+        assert!(!lights.is_empty() && lights.len() < 16);
+        assert!(lights.iter().all(|(d, _)| d.y > 0.0));
+        assert!(sky_lights(&flat, 1.0, 0).is_empty());
     }
 }
