@@ -505,6 +505,8 @@ struct Compute {
 struct Cascade {
     /// Ping-pong bind groups: [0] reads A writes B, [1] reads B writes A.
     groups: [wgpu::BindGroup; 2],
+    /// As `groups[1]`, reading the sky views' RSM (when there are sky views).
+    sky_group: Option<wgpu::BindGroup>,
     lpv_atomic: wgpu::Buffer,
     gv_atomic: wgpu::Buffer,
     buffers: [wgpu::Buffer; 2],
@@ -515,13 +517,15 @@ pub struct Lpv {
     pub settings: LpvSettings,
     /// The cascades' grids, finest first; the last is fitted around the scene.
     pub grids: Vec<Grid>,
-    /// Each RSM view's side (its viewport), in the order they are rendered.
-    light_sizes: Vec<u32>,
+    /// Each RSM view's side and whether it is the sky's, in the order they are rendered.
+    light_sizes: Vec<(u32, bool)>,
     rsm_pipeline: wgpu::RenderPipeline,
     rsm_group: wgpu::BindGroup,
     rsm_views: Vec<wgpu::TextureView>,
     rsm_textures: Vec<wgpu::Texture>,
     rsm_depth: wgpu::TextureView,
+    /// The sky views' own RSM targets (views and depth), smaller than the lights'.
+    sky_rsm: Option<(Vec<wgpu::TextureView>, wgpu::TextureView)>,
     compute: Compute,
     cascades: Vec<Cascade>,
     /// The uniform slots (2 per cascade) and their bytes, rewritten when the wind changes.
@@ -576,7 +580,7 @@ impl Lpv {
             // First, so that the last view rendered (the RSM textures' content) is a light's.
             lights.insert(0, (camera_view(camera, aspect, &grid, size), 0.0));
         }
-        let light_sizes = lights.iter().map(|l| l.0.size).collect();
+        let light_sizes = lights.iter().map(|l| (l.0.size, l.0.sky == 1)).collect();
         let uniform_bytes = setup::uniform_slots(&settings, &grids, bound, wind);
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lpv uniforms"),
@@ -586,6 +590,10 @@ impl Lpv {
         let light_buf = setup::light_slots(device, &lights);
         let textures = setup::volume_textures(device, grid.n, grids.len() as u32);
         let (rsm_textures, rsm_views, rsm_depth) = setup::rsm_targets(device, size);
+        let sky_rsm = lights.iter().find(|l| l.0.sky == 1).map(|l| {
+            let (_, views, depth) = setup::rsm_targets(device, l.0.size);
+            (views, depth)
+        });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lpv"),
             source: wgpu::ShaderSource::Wgsl(LPV_SOURCE.as_str().into()),
@@ -600,6 +608,7 @@ impl Lpv {
             uniforms: &uniforms,
             lights: &light_buf,
             rsm: &rsm_views,
+            sky_rsm: sky_rsm.as_ref().map(|r| r.0.as_slice()),
             out: &textures
                 .each_ref()
                 .map(|t| t.create_view(&Default::default())),
@@ -617,6 +626,7 @@ impl Lpv {
             rsm_views,
             rsm_textures,
             rsm_depth,
+            sky_rsm,
             compute,
             cascades,
             uniforms,
@@ -628,13 +638,20 @@ impl Lpv {
     /// GPU memory of the volumes and the RSM [bytes]: per cascade the fixed-point injection
     /// atomics (48 B/cell), the ping-pong and accumulation buffers (3 × 48 B/cell), the geometry
     /// volume and its atomics (2 × 16 B per (n+1)³ cell), plus the three RGBA16F 3D textures
-    /// (24 B/cell) and the RSM (flux, normal: 8 B, position: 16 B, depth: 4 B per texel).
+    /// (24 B/cell) and the RSM (flux, normal: 8 B, position: 16 B, depth: 4 B per texel), the
+    /// lights' and the sky views' smaller one.
     pub fn memory_bytes(&self) -> u64 {
         let n = self.grids[0].n as u64;
         let cascades = self.grids.len() as u64;
         let per_cascade = 4 * CELL_BYTES * n.pow(3) + 32 * (n + 1).pow(3) + 24 * n.pow(3);
-        let rsm = (self.settings.rsm_size as u64).pow(2) * (8 + 8 + 16 + 4);
-        cascades * per_cascade + rsm
+        let texel = 8 + 8 + 16 + 4;
+        let rsm = (self.settings.rsm_size as u64).pow(2) * texel;
+        let sky = self
+            .light_sizes
+            .iter()
+            .find(|l| l.1)
+            .map_or(0, |l| (l.0 as u64).pow(2) * texel);
+        cascades * per_cascade + rsm + sky
     }
 
     /// Sway the RSM's geometry with `wind` from the next frame on.
@@ -705,9 +722,13 @@ impl Lpv {
                 end_of_pass_write_index: Some(e),
             })
         };
-        for (li, &size) in self.light_sizes.iter().enumerate() {
+        for (li, &(size, sky)) in self.light_sizes.iter().enumerate() {
             let light_offset = (li as u64 * SLOT) as u32;
             let wg_rsm = size.div_ceil(8);
+            let (views, depth) = match (&self.sky_rsm, sky) {
+                (Some((v, d)), true) => (v.as_slice(), d),
+                _ => (self.rsm_views.as_slice(), &self.rsm_depth),
+            };
             {
                 let t = ts("lpv rsm");
                 let color = |v| {
@@ -723,13 +744,9 @@ impl Lpv {
                 };
                 let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("lpv rsm"),
-                    color_attachments: &[
-                        color(&self.rsm_views[0]),
-                        color(&self.rsm_views[1]),
-                        color(&self.rsm_views[2]),
-                    ],
+                    color_attachments: &[color(&views[0]), color(&views[1]), color(&views[2])],
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &self.rsm_depth,
+                        view: depth,
                         depth_ops: Some(wgpu::Operations {
                             load: wgpu::LoadOp::Clear(1.0),
                             store: wgpu::StoreOp::Discard,
@@ -744,7 +761,6 @@ impl Lpv {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                pass.set_viewport(0.0, 0.0, size as f32, size as f32, 0.0, 1.0);
                 pass.set_pipeline(&self.rsm_pipeline);
                 pass.set_bind_group(0, &self.rsm_group, &[0, light_offset]);
                 pass.set_vertex_buffer(0, scene.vertices.slice(..));
@@ -764,7 +780,11 @@ impl Lpv {
                 timestamp_writes: compute_ts(t),
             });
             for (ci, c) in self.cascades.iter().enumerate() {
-                pass.set_bind_group(0, &c.groups[1], &[slot(ci, false), light_offset]);
+                let group = match (&c.sky_group, sky) {
+                    (Some(g), true) => g,
+                    _ => &c.groups[1],
+                };
+                pass.set_bind_group(0, group, &[slot(ci, false), light_offset]);
                 if wpi {
                     // Group 1 writes buffer A.
                     pass.set_pipeline(&self.compute.inject_wpi);

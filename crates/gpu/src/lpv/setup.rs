@@ -314,6 +314,8 @@ pub(super) struct CascadeInputs<'a> {
     pub uniforms: &'a wgpu::Buffer,
     pub lights: &'a wgpu::Buffer,
     pub rsm: &'a [wgpu::TextureView],
+    /// The sky views' RSM, when there are sky views.
+    pub sky_rsm: Option<&'a [wgpu::TextureView]>,
     pub out: &'a [wgpu::TextureView; 3],
 }
 
@@ -340,7 +342,7 @@ pub(super) fn cascade(device: &wgpu::Device, c: &CascadeInputs, n: u32) -> Casca
     ];
     let accum = storage("lpv accumulation", cells * CELL_BYTES, read);
     let gv = storage("geometry volume", gv_cells * 16, read);
-    let group = |src: &wgpu::Buffer, dst: &wgpu::Buffer| {
+    let group = |src: &wgpu::Buffer, dst: &wgpu::Buffer, rsm: &[wgpu::TextureView]| {
         let e = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         let view = wgpu::BindingResource::TextureView;
         device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -349,9 +351,9 @@ pub(super) fn cascade(device: &wgpu::Device, c: &CascadeInputs, n: u32) -> Casca
             entries: &[
                 uniform_binding(0, c.uniforms, std::mem::size_of::<LpvUniforms>()),
                 uniform_binding(1, c.lights, std::mem::size_of::<RsmLight>()),
-                e(2, view(&c.rsm[0])),
-                e(3, view(&c.rsm[1])),
-                e(4, view(&c.rsm[2])),
+                e(2, view(&rsm[0])),
+                e(3, view(&rsm[1])),
+                e(4, view(&rsm[2])),
                 e(5, lpv_atomic.as_entire_binding()),
                 e(6, gv_atomic.as_entire_binding()),
                 e(7, src.as_entire_binding()),
@@ -365,11 +367,12 @@ pub(super) fn cascade(device: &wgpu::Device, c: &CascadeInputs, n: u32) -> Casca
         })
     };
     let groups = [
-        group(&buffers[0], &buffers[1]),
-        group(&buffers[1], &buffers[0]),
+        group(&buffers[0], &buffers[1], c.rsm),
+        group(&buffers[1], &buffers[0], c.rsm),
     ];
     Cascade {
         groups,
+        sky_group: c.sky_rsm.map(|rsm| group(&buffers[1], &buffers[0], rsm)),
         lpv_atomic,
         gv_atomic,
         buffers,

@@ -3,11 +3,11 @@
 // directions. Compiled after raster.wgsl, before the source's own WGSL; group 2, bindings 8–10.
 
 // One sky direction: its orthographic view-projection, the unit direction towards the sky and
-// its cell's irradiance as nine SH coefficients.
+// the luminance of its cell's irradiance as nine SH coefficients (0–3, 4–7, 8).
 struct SkyDir {
     view_proj: mat4x4<f32>,
     dir: vec4<f32>,
-    sh: array<vec4<f32>, 9>,
+    lum: array<vec4<f32>, 3>,
 }
 
 // x: directions (0: no occlusion), y: a map texel in world units, z: the scene's radius.
@@ -33,20 +33,21 @@ fn sky_visible(k: u32, p: vec3<f32>, ng: vec3<f32>) -> f32 {
 }
 
 // The fraction of the sky's irradiance at n that reaches p: Σ V_k E_k(n) / Σ E_k(n) by
-// luminance (1 without occlusion).
+// luminance (1 without occlusion). Directions whose cell does not light n are not sampled.
 fn sky_visibility(s: Surface) -> f32 {
     let count = u32(sky.header.x);
     let y = sh9(s.n);
+    let y0 = vec4<f32>(y[0], y[1], y[2], y[3]);
+    let y1 = vec4<f32>(y[4], y[5], y[6], y[7]);
     var all = 0.0;
     var seen = 0.0;
     for (var k = 0u; k < count; k++) {
-        var e = vec3<f32>(0.0);
-        for (var j = 0u; j < 9u; j++) {
-            e += sky.dirs[k].sh[j].xyz * y[j];
+        let c = sky.dirs[k].lum;
+        let w = dot(c[0], y0) + dot(c[1], y1) + c[2].x * y[8];
+        if w > 0.0 {
+            all += w;
+            seen += w * sky_visible(k, s.p, s.ng);
         }
-        let w = max(dot(max(e, vec3<f32>(0.0)), vec3<f32>(0.2126, 0.7152, 0.0722)), 0.0);
-        all += w;
-        seen += w * sky_visible(k, s.p, s.ng);
     }
     return select(1.0, seen / max(all, 1e-8), count > 0u && all > 0.0);
 }

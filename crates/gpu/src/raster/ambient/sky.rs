@@ -28,13 +28,27 @@ pub const DEFAULT_DIRECTIONS: u32 = 64;
 const MAP_SIZE: u32 = 256;
 
 /// Per direction (WGSL `SkyDir`): its view-projection, the unit direction towards the sky, and
-/// its cell's irradiance as nine SH coefficients (RGB).
+/// the luminance of its cell's irradiance as nine SH coefficients (packed four to a vec4; the
+/// occlusion weighs directions by luminance, so colour would cost three times the reads and
+/// arithmetic in every fragment for nothing).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct SkyDir {
     pub view_proj: [[f32; 4]; 4],
     pub dir: [f32; 4],
-    pub sh: [[f32; 4]; 9],
+    pub lum: [[f32; 4]; 3],
+}
+
+/// Rec. 709 luminance, as the shader's weights.
+const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+
+/// Nine RGB SH coefficients as nine luminance coefficients, packed into three vec4.
+fn packed_luminance(sh: &[Vec3; 9]) -> [[f32; 4]; 3] {
+    let mut out = [[0.0; 4]; 3];
+    for (j, c) in sh.iter().enumerate() {
+        out[j / 4][j % 4] = c.dot(LUMINANCE);
+    }
+    out
 }
 
 /// The occlusion's resources (group 2, bindings 3–5 of the `sky` source).
@@ -152,7 +166,7 @@ impl SkyOcclusion {
             .map(|(d, sh)| SkyDir {
                 view_proj: view_proj(*d, centre, radius).to_cols_array_2d(),
                 dir: d.extend(0.0).to_array(),
-                sh: sh.map(|c| c.extend(0.0).to_array()),
+                lum: packed_luminance(sh),
             })
             .collect();
         let device = &ctx.device;
