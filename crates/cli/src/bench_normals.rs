@@ -49,11 +49,12 @@ pub fn run(a: &NormalFilterBenchArgs, json: bool) -> Result<()> {
         NormalFilter::Variance,
         NormalFilter::Lit,
         NormalFilter::None,
+        NormalFilter::Rook,
     ];
     println!(
-        "shape | model | roughness | relMSE box / variance / lit / none | shimmer box / \
-         variance / lit / none (reference) | error ratio box/variance, box/lit | shimmer ratio \
-         box/variance, box/lit"
+        "shape | model | roughness | relMSE box / variance / lit / none / rook | shimmer box / \
+         variance / lit / none / rook (reference) | error ratio box/variance, box/lit | shimmer \
+         ratio box/variance, box/lit"
     );
     let mut rows = vec![];
     for &shape in &a.shapes {
@@ -64,16 +65,19 @@ pub fn run(a: &NormalFilterBenchArgs, json: bool) -> Result<()> {
                 let ratio = |k: usize| (f[0].relmse / f[k].relmse, f[0].flicker / f[k].flicker);
                 let ((ev, sv), (el, sl)) = (ratio(1), ratio(2));
                 println!(
-                    "{shape} | {model} | {roughness} | {:.4} / {:.4} / {:.4} / {:.4} | {:.4} / \
-                     {:.4} / {:.4} / {:.4} ({moved:.4}) | {ev:.1}, {el:.1} | {sv:.1}, {sl:.1}",
+                    "{shape} | {model} | {roughness} | {:.4} / {:.4} / {:.4} / {:.4} / {:.4} | \
+                     {:.4} / {:.4} / {:.4} / {:.4} / {:.4} ({moved:.4}) | {ev:.1}, {el:.1} | \
+                     {sv:.1}, {sl:.1}",
                     f[0].relmse,
                     f[1].relmse,
                     f[2].relmse,
                     f[3].relmse,
+                    f[4].relmse,
                     f[0].flicker,
                     f[1].flicker,
                     f[2].flicker,
-                    f[3].flicker
+                    f[3].flicker,
+                    f[4].flicker
                 );
                 rows.push(serde_json::json!({
                     "shape": shape.to_string(), "model": model.to_string(),

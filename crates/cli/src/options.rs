@@ -531,10 +531,11 @@ pub struct RasterArgs {
     /// reflection lobe, so distant bumps turn into the gloss they make), lit (Heidrich's order:
     /// each light lights 4 × 4 normals under the pixel, then they are averaged; forward path,
     /// 16 times the lighting cost on normal-mapped surfaces), box (box-mipped normals: distant
-    /// bumps shine like a flat surface and shimmer) or none (the finest level only: aliases;
-    /// exact when supersampled).
-    #[arg(long, default_value = "variance")]
-    pub normal_filter: NormalFilter,
+    /// bumps shine like a flat surface and shimmer), none (the finest level only: aliases;
+    /// exact when supersampled) or rook (the WPI report's eight-tap filter, §5.5). Default:
+    /// variance; rook for `lpv-faithful`.
+    #[arg(long)]
+    pub normal_filter: Option<NormalFilter>,
     /// How Torrance–Sparrow and Banks materials are evaluated: analytic (their formulas) or
     /// tables (Heidrich's 2-D lookup tables, §5.1–5.2, read per fragment; forward path only).
     #[arg(long, default_value = "analytic", value_parser = ["analytic", "tables"])]
@@ -571,7 +572,7 @@ impl Default for RasterArgs {
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
             planar_mirrors: "on".into(),
-            normal_filter: NormalFilter::Variance,
+            normal_filter: None,
             brdf_eval: "analytic".into(),
             brdf_table_bits: "16".into(),
         }
@@ -607,7 +608,7 @@ impl RasterArgs {
             (_, "8") => BrdfEval::Tables(TableBits::Eight),
             _ => BrdfEval::Tables(TableBits::Sixteen),
         };
-        if self.normal_filter == NormalFilter::Lit && self.path == RenderPath::Deferred {
+        if self.normal_filter == Some(NormalFilter::Lit) && self.path == RenderPath::Deferred {
             bail!(
                 "--normal-filter lit needs --path forward: the deferred path lights one normal \
                  per pixel from the G-buffer"
@@ -643,7 +644,7 @@ impl RasterArgs {
             refraction: self.refraction,
             env_texels: self.env_texels,
             planar_mirrors: self.planar_mirrors == "on",
-            normal_filter: self.normal_filter,
+            normal_filter: self.normal_filter.unwrap_or(NormalFilter::Variance),
             brdf_eval,
             ..Default::default()
         })

@@ -5,7 +5,7 @@
 //! quarter-pixel camera turn. Runs on lavapipe in CI.
 
 use lightlab_gpu::normal_filter::{FilterStudy, measure};
-use lightlab_gpu::raster::NormalFilter;
+use lightlab_gpu::raster::{Ambient, NormalFilter, RasterSettings, Renderer, ShadowMethod};
 use lightlab_gpu::test_context;
 use lightlab_scene::BrdfModel;
 use lightlab_scene::builtin::bumps::{BumpShape, filter_scene};
@@ -46,4 +46,57 @@ fn filtered_bumps_halve_the_box_filters_error_and_flicker() {
             );
         }
     }
+}
+
+/// The WPI report's rooks filter (§5.5): a constant normal map comes out unchanged (every tap
+/// agrees with the centre), and on Perlin bumps it smooths: less shimmer than the box filter,
+/// the same error (it normalises, so it cannot turn bumps into gloss).
+#[test]
+fn the_rook_filter_keeps_a_constant_map_and_smooths_bumps() {
+    let Some(ctx) = test_context() else { return };
+    let mut scene = filter_scene(BumpShape::Plane, BrdfModel::BlinnPhong, 0.3);
+    let study = FilterStudy::default();
+    let (figures, _) = measure(
+        &ctx,
+        &scene,
+        &scene.cameras[0],
+        &study,
+        &[NormalFilter::Box, NormalFilter::Rook],
+    )
+    .unwrap();
+    let (b, r) = (&figures[0], &figures[1]);
+    eprintln!("perlin plane: box {b:?}, rook {r:?}");
+    assert!(r.flicker < 0.9 * b.flicker, "rook {r:?} against box {b:?}");
+    assert!(
+        (r.relmse / b.relmse - 1.0).abs() < 0.1,
+        "rook {r:?} against box {b:?}"
+    );
+    // A constant tilted normal: the filter returns it.
+    let tilted = glam::Vec3::new(0.3, -0.2, 0.93).normalize() * 0.5 + glam::Vec3::splat(0.5);
+    for t in &mut scene.textures {
+        let n = t.texels.len();
+        t.texels = lightlab_scene::Texels::Rgba32F(vec![tilted.extend(1.0); n]);
+    }
+    let image = |filter| {
+        let mut r = Renderer::new(
+            &ctx,
+            &scene,
+            RasterSettings {
+                width: 96,
+                height: 72,
+                shadows: ShadowMethod::None,
+                ambient: Ambient::None,
+                background: false,
+                normal_filter: filter,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        r.render(&ctx);
+        r.read_hdr(&ctx).unwrap()
+    };
+    let e = lightlab_core::metrics::relmse(&image(NormalFilter::Rook), &image(NormalFilter::Box))
+        .unwrap();
+    eprintln!("constant map: rook against box relMSE {e:.2e}");
+    assert!(e < 1e-6, "{e}");
 }

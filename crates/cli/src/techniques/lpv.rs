@@ -26,6 +26,10 @@ pub fn renderer(ctx: &GpuContext, req: &Request) -> Result<Renderer> {
         Technique::LpvFaithful => LpvScheme::Wpi,
         _ => LpvScheme::Kaplanyan,
     };
+    if scheme == LpvScheme::Wpi && a.normal_filter.is_none() {
+        // The report's own filter (§5.5).
+        settings.normal_filter = lightlab_gpu::raster::NormalFilter::Rook;
+    }
     let s = lpv.settings(scheme)?;
     Ok(Renderer::with_lpv(
         ctx,

@@ -210,6 +210,7 @@ fn frame_uniforms(
             NormalFilter::Variance => 1,
             NormalFilter::None => 2,
             NormalFilter::Lit => 3,
+            NormalFilter::Rook => 4,
         },
         _pad1: 0,
         _pad2: 0,

@@ -173,6 +173,12 @@ pub enum NormalFilter {
     /// Toksvig-widened) and average them (`lit_then_filtered` in raster.wgsl); the ambient and
     /// environment terms filter as `Variance`. The deferred path refuses it.
     Lit,
+    /// The WPI report's filter (Dickson et al. 2011, §5.5, `lpv-faithful`'s): eight taps in
+    /// a rooks pattern at 0.35 × (1, 4), (3, 1), (4, −2), (1.5, −3) and their negatives, in
+    /// texels of the map (the report's was 512²), each weighted by its agreement with the
+    /// centre: n′ = normalize(n₀ + Σ nᵢ (nᵢ·n₀)). The authors' own, against specular noise of
+    /// a too-dense map; it reads the box-mipped levels.
+    Rook,
 }
 
 lightlab_core::named_enum!(NormalFilter, "normal filter", {
@@ -180,6 +186,7 @@ lightlab_core::named_enum!(NormalFilter, "normal filter", {
     Variance => "variance",
     None => "none",
     Lit => "lit",
+    Rook => "rook",
 });
 
 #[derive(Clone, Debug)]

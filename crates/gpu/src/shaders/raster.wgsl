@@ -86,6 +86,33 @@ fn vertex_normal(in: VertexOut, front: bool) -> vec3<f32> {
 
 // A normal-map texel t4 (xyz·½ + ½) as a world normal around the front-facing vertex normal
 // n, in the vertex's tangent frame (glTF: bitangent n × t · w).
+// One tap of the rooks filter: the unit normal at uv + o texels, weighted by its agreement
+// with the centre n0 (negative beyond 90°).
+fn rook_tap(uv: vec2<f32>, o: vec2<f32>, texel: vec2<f32>, n0: vec3<f32>) -> vec3<f32> {
+    let t = textureSample(normal_tex, tex_sampler, uv + o * texel).xyz * 2.0 - 1.0;
+    let ni = safe_normalize(t, n0);
+    return ni * dot(ni, n0);
+}
+
+// The WPI report's normal-map filter (§5.5; NormalFilter::Rook): eight taps in a rooks
+// pattern at 0.35 × the report's offsets, in texels of the map, n′ = normalize(n₀ + Σ nᵢ·(nᵢ·n₀))
+// with n₀ the unnormalised centre. Returns the packed texel map_normal reads.
+fn rook_filtered(uv: vec2<f32>) -> vec4<f32> {
+    let texel = 0.35 / vec2<f32>(textureDimensions(normal_tex, 0));
+    let c = textureSample(normal_tex, tex_sampler, uv);
+    let n0 = c.xyz * 2.0 - 1.0;
+    var sum = n0;
+    sum += rook_tap(uv, vec2<f32>(1.0, 4.0), texel, n0);
+    sum += rook_tap(uv, vec2<f32>(3.0, 1.0), texel, n0);
+    sum += rook_tap(uv, vec2<f32>(4.0, -2.0), texel, n0);
+    sum += rook_tap(uv, vec2<f32>(1.5, -3.0), texel, n0);
+    sum += rook_tap(uv, vec2<f32>(-1.0, -4.0), texel, n0);
+    sum += rook_tap(uv, vec2<f32>(-3.0, -1.0), texel, n0);
+    sum += rook_tap(uv, vec2<f32>(-4.0, 2.0), texel, n0);
+    sum += rook_tap(uv, vec2<f32>(-1.5, 3.0), texel, n0);
+    return vec4<f32>(safe_normalize(sum, vec3<f32>(0.0, 0.0, 1.0)) * 0.5 + 0.5, c.w);
+}
+
 fn map_normal(in: VertexOut, n: vec3<f32>, t4: vec4<f32>) -> vec3<f32> {
     let t = t4.xyz * 2.0 - 1.0;
     let tn = safe_normalize(vec3<f32>(t.xy * material.normal_scale, t.z), vec3<f32>(0.0, 0.0, 1.0));
@@ -163,6 +190,8 @@ fn surface(in: VertexOut, front: bool) -> Surface {
         var t4 = textureSampleBias(normal_tex, tex_sampler, nuv, select(0.0, 1.0, variance));
         if frame.normal_filter == 2u {
             t4 = textureSampleLevel(normal_tex, tex_sampler, nuv, 0.0);
+        } else if frame.normal_filter == 4u {
+            t4 = rook_filtered(nuv);
         }
         if variance {
             // The map's alpha: the spread σ² of the full-resolution normals under this texel
