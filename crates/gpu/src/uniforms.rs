@@ -82,6 +82,14 @@ pub struct LpvAmbientUniforms {
     pub pad1: u32,
     pub pad2: u32,
     pub grids: [[f32; 4]; 4],
+    /// `lpv-faithful`'s composite (the WPI report's App. B): the sun's direction of travel
+    /// (w: 1 when the composite replaces the light passes).
+    pub sun_dir: [f32; 4],
+    /// The sun's irradiance on a surface facing it (rgb); w: the shadow bias in the RSM's
+    /// depth units.
+    pub sun_e: [f32; 4],
+    /// The sun's RSM view-projection (orthographic, depth 0..1).
+    pub rsm_view_proj: [[f32; 4]; 4],
 }
 
 /// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional, 3 area (an emissive
@@ -243,7 +251,10 @@ mod tests {
                     pad0,
                     pad1,
                     pad2,
-                    grids
+                    grids,
+                    sun_dir,
+                    sun_e,
+                    rsm_view_proj
                 ),
             ),
             (

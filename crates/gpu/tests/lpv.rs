@@ -565,3 +565,105 @@ fn camera_blockers_stop_light_that_no_light_sees_the_blocker_of() {
     // The light inside is not blocked more than a few percent by the extra blockers.
     assert!(inside_b > 0.8 * inside, "{inside_b} vs {inside}");
 }
+
+/// `lpv-faithful` lit by one sun shades with the WPI report's composite (App. B) instead of
+/// the light passes. A Lambert plane lit straight down, a slab floating above its centre: at
+/// the shadow's centre the image must be a·E/π·illum with illum the report's screen blends of
+/// its depth-difference shadow (every tap sees the slab: 1 − clamp(17·(Δz − bias))), GI and TI
+/// evaluated from the volume read back; on the open plane the blend saturates at a·E/π.
+#[test]
+fn lpv_faithful_composites_as_the_report() {
+    use lightlab_scene::builtin::geom::{aabb_box, quad};
+    let Some(ctx) = test_context() else { return };
+    let albedo = 0.6;
+    let irradiance = 3.0;
+    let mut scene = Scene::default();
+    let m = scene.add_material(lightlab_scene::Material {
+        brdf: lightlab_scene::BrdfModel::Lambert,
+        ..lightlab_scene::Material::diffuse("ground", Vec3::splat(albedo))
+    });
+    let c = [(-3.0, 3.0), (3.0, 3.0), (3.0, -3.0), (-3.0, -3.0)].map(|(x, z)| Vec3::new(x, 0.0, z));
+    scene.add_mesh(quad("ground", c, m), glam::Mat4::IDENTITY);
+    let slab = (Vec3::new(-0.5, 0.35, -0.5), Vec3::new(0.5, 0.4, 0.5));
+    scene.add_mesh(aabb_box("slab", slab.0, slab.1, m), glam::Mat4::IDENTITY);
+    scene.lights.push(lightlab_scene::Light {
+        name: "sun".into(),
+        kind: lightlab_scene::LightKind::Directional {
+            angular_diameter: 0.0,
+        },
+        color: Vec3::ONE,
+        intensity: irradiance,
+        position: Vec3::ZERO,
+        direction: -Vec3::Y,
+        range: None,
+    });
+    // Camera 0 looks at the shadow's centre from low on the side (under the slab); camera 1
+    // straight down at the open plane.
+    scene.cameras.push(lightlab_scene::Camera::look_at(
+        "shadow",
+        Vec3::new(3.0, 0.4, 0.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        0.3,
+    ));
+    scene.cameras.push(lightlab_scene::Camera::look_at(
+        "open",
+        Vec3::new(-2.0, 3.0, 0.0),
+        Vec3::new(-2.0, 0.0, 0.0),
+        Vec3::Z,
+        0.3,
+    ));
+    let s = LpvSettings {
+        scheme: LpvScheme::Wpi,
+        grid: 16,
+        rsm_size: 256,
+        iterations: Some(2),
+        ..Default::default()
+    };
+    let centre = |camera: usize| {
+        let rs = RasterSettings {
+            width: 64,
+            height: 64,
+            shadows: ShadowMethod::Map,
+            ambient: Ambient::None,
+            camera,
+            ..Default::default()
+        };
+        let mut r = Renderer::with_lpv(&ctx, &scene, rs, &s, false).unwrap();
+        r.render(&ctx);
+        let img = r.read_hdr(&ctx).unwrap();
+        let px = (img.get(31, 31) + img.get(32, 31) + img.get(31, 32) + img.get(32, 32)) / 4.0;
+        (r, px)
+    };
+    let lit = albedo * irradiance / std::f32::consts::PI;
+    let (_, open) = centre(1);
+    eprintln!("open plane: {open} (a·E/π = {lit})");
+    assert!(
+        (open - Vec3::splat(lit)).abs().max_element() < 0.01 * lit,
+        "{open} vs {lit}"
+    );
+
+    let (r, shaded) = centre(0);
+    let lpv = r.lpv().unwrap();
+    let light = lpv.composite_light().expect("one sun: the composite");
+    let vp = glam::Mat4::from_cols_array_2d(&light.view_proj);
+    let depth = |p: Vec3| vp.project_point3(p).z;
+    let gap = depth(Vec3::ZERO) - depth(Vec3::new(0.0, slab.1.y, 0.0)) - 2e-3;
+    let shadow = 1.0 - (17.0 * gap.max(0.0)).clamp(0.0, 1.0);
+    let vol = lpv.read_volume(&ctx, 0).unwrap();
+    let cell = vol.sample(Vec3::ZERO);
+    let toward = |ch: usize, d: Vec3| lightlab_core::lpv::eval(&cell[ch], d) / irradiance;
+    let want = Vec3::from_array(std::array::from_fn(|ch| {
+        let gi = toward(ch, -Vec3::Y).clamp(0.0, 1.0);
+        let ti = 0.05 * toward(ch, -Vec3::Y).clamp(0.0, 1.0) * shadow;
+        let illum = shadow + (1.0 - shadow) * gi;
+        lit * (illum + (1.0 - illum) * ti)
+    }));
+    eprintln!("shadow's centre: {shaded} (the report's composite: {want}; shadow {shadow:.3})");
+    assert!(shadow > 0.05 && shadow < 0.95, "a partial shadow: {shadow}");
+    // Without GI and TI it would be lit·shadow, 0.0126 lower here.
+    assert!(
+        (shaded - want).abs().max_element() < 0.005 * lit,
+        "{shaded} vs {want}"
+    );
+}

@@ -519,6 +519,9 @@ pub struct Lpv {
     pub grids: Vec<Grid>,
     /// Each RSM view's side and whether it is the sky's, in the order they are rendered.
     light_sizes: Vec<(u32, bool)>,
+    /// `lpv-faithful` lit by one directional light: that light's RSM view, whose depth the
+    /// report's composite reads as its shadow map ([`Lpv::composite_light`]).
+    composite_light: Option<RsmLight>,
     rsm_pipeline: wgpu::RenderPipeline,
     rsm_group: wgpu::BindGroup,
     rsm_views: Vec<wgpu::TextureView>,
@@ -570,7 +573,13 @@ impl Lpv {
         let grids = settings.grids_for(scene, eye, forward);
         let grid = *grids.last().expect("at least one cascade");
         let size = settings.rsm_size;
-        let mut lights = rsm_lights(scene, env.sun, env.sky, &grid, size);
+        // The report's volume holds its sun's light only (its sky is a term of the composite).
+        let sky = if settings.scheme == LpvScheme::Wpi {
+            &[]
+        } else {
+            env.sky
+        };
+        let mut lights = rsm_lights(scene, env.sun, sky, &grid, size);
         // The sky's cells first, so that the last view rendered (the RSM textures' content,
         // for the debug views) is a light's at the full size.
         lights.sort_by_key(|l| l.0.sky == 0);
@@ -581,6 +590,10 @@ impl Lpv {
             lights.insert(0, (camera_view(camera, aspect, &grid, size), 0.0));
         }
         let light_sizes = lights.iter().map(|l| (l.0.size, l.0.sky == 1)).collect();
+        let composite_light = match lights.as_slice() {
+            [(only, _)] if settings.scheme == LpvScheme::Wpi && only.kind == 0 => Some(*only),
+            _ => None,
+        };
         let uniform_bytes = setup::uniform_slots(&settings, &grids, bound, wind);
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lpv uniforms"),
@@ -621,6 +634,7 @@ impl Lpv {
             settings,
             grids,
             light_sizes,
+            composite_light,
             rsm_pipeline,
             rsm_group,
             rsm_views,
@@ -669,6 +683,19 @@ impl Lpv {
     /// Number of RSM lights (directional, spot, emissive instances).
     pub fn light_count(&self) -> usize {
         self.light_sizes.len()
+    }
+
+    /// The light the WPI report's composite shades with (`lpv-faithful` lit by exactly one
+    /// directional light, as the report's scene): its RSM view, whose positions the composite
+    /// reads as its shadow map. None otherwise: the usual light passes light the frame.
+    pub fn composite_light(&self) -> Option<&RsmLight> {
+        self.composite_light.as_ref()
+    }
+
+    /// The RSM's position texture (world position, w = texel area; 0 = empty) of the last
+    /// light rendered.
+    pub fn rsm_position_view(&self) -> &wgpu::TextureView {
+        &self.rsm_views[2]
     }
 
     /// The RSM textures (flux, normal, position) of the last light rendered.

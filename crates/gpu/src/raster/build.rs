@@ -132,8 +132,9 @@ impl FrameBuffers {
 }
 
 /// Sampled textures the LPV techniques' fragment stage binds (materials, shadow maps,
-/// environment maps and their extras (mirrors, light field), the volume's three, the sky occlusion's depth maps).
-const LPV_SAMPLED_TEXTURES: u32 = 18;
+/// environment maps and their extras (mirrors, light field), the volume's three, the sky
+/// occlusion's depth maps, the RSM's positions for `lpv-faithful`'s composite).
+const LPV_SAMPLED_TEXTURES: u32 = 19;
 
 /// The `sky` and `lpv` sources' occlusion: the sky's diffuse light (without the sun taken out of it, or
 /// a constant ambient's uniform sky) over `s.sky_occlusion` shadow-mapped directions.

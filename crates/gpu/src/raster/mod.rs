@@ -365,7 +365,9 @@ impl Renderer {
         );
         if !self.ambient.indirect_only() {
             self.sky_pass(&mut enc, &mut labels);
-            self.light_passes(&mut enc, &mut labels);
+            if !self.ambient.composite() {
+                self.light_passes(&mut enc, &mut labels);
+            }
         }
         // Tonemap: the 8-bit frame a viewer would display.
         {

@@ -85,6 +85,80 @@ fn lpv_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return e;
 }
 
+// ---- lpv-faithful's composite (the WPI report's App. B, defCompositor) ----------------------
+
+// The RSM's world positions (w: texel area, 0 = empty) of the composite's light: its shadow map.
+@group(2) @binding(11) var rsm_position: texture_2d<f32>;
+
+// One tap of the report's depth-difference shadow: max(0, z − z_occluder − bias) in the RSM's
+// depth (0..1 over the light's orthographic range); 0 off the map or where it saw nothing.
+fn wpi_depth_gap(uv: vec2<f32>, z: f32) -> f32 {
+    if any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0)) {
+        return 0.0;
+    }
+    let q = textureLoad(rsm_position, vec2<i32>(uv * vec2<f32>(textureDimensions(rsm_position, 0))), 0);
+    if q.w <= 0.0 {
+        return 0.0;
+    }
+    let zo = (lpv_u.rsm_view_proj * vec4<f32>(q.xyz, 1.0)).z;
+    return max(0.0, z - zo - lpv_u.sun_e.w);
+}
+
+// The report's soft shadow: the depth gaps of 1 + 16 taps within 1/256 of the map summed (not
+// averaged), a summed gap of 1 being full shadow; 1 = lit. Its taps come from a random texture,
+// here a fixed Vogel spiral over the disc of radius 1/256.
+fn wpi_shadow(p: vec3<f32>) -> f32 {
+    let c = lpv_u.rsm_view_proj * vec4<f32>(p, 1.0);
+    let uv = vec2<f32>(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5);
+    var gap = wpi_depth_gap(uv, c.z);
+    for (var i = 0u; i < 16u; i++) {
+        let r = sqrt((f32(i) + 0.5) / 16.0) / 256.0;
+        let a = f32(i) * 2.39996323;
+        gap += wpi_depth_gap(uv + r * vec2<f32>(cos(a), sin(a)), c.z);
+    }
+    return 1.0 - clamp(gap, 0.0, 1.0);
+}
+
+// The volume's SH (r, g, b) evaluated towards d.
+fn lpv_toward(v: LpvSample, d: vec3<f32>) -> vec3<f32> {
+    let y = vec4<f32>(0.2820948, 0.4886025 * d.y, 0.4886025 * d.z, 0.4886025 * d.x);
+    return vec3<f32>(dot(v.r, y), dot(v.g, y), dot(v.b, y));
+}
+
+// The report's shading, in its units (1 = the sun's full irradiance; its volume held albedo,
+// ours albedo × the sun's irradiance, so GI and TI are divided by it), then back to radiance:
+//   GI = clamp(SH(p + 0.001·n)·Y(−n)), TI = backScatter · clamp(SH·Y(L)) · shadow,
+//   backScatter = 0.05 + min(2, max(n·L, 0) / max(0.1, 1 − t)),  L the sun's travel,
+//   illum = diffuse + (1 − diffuse)·GI, then illum + (1 − illum)·TI (screen blends),
+//   diffuse = clamp(n·l) · shadow,
+//   colour = albedo·illum·E/π + 0.2·sky(n) + spec·shadow·E,
+//   spec = (p + 8)/(8π)·(n·h)^p·(n·l)  (the report's 0.8 is Eq 2.3's 8, its erratum).
+// Deviations: the specular colour is the material's F0 (the report's is white); the sky is the
+// environment's sharpest level along n (the report's angular map), occluded as the other
+// techniques' sky (the report's scene was open; a closed room would glow), and `--ambient none`
+// drops it.
+fn wpi_composite(s: Surface) -> vec3<f32> {
+    let l = lpv_u.sun_dir.xyz;
+    let e = lpv_u.sun_e.xyz;
+    let inv_e = select(vec3<f32>(0.0), vec3<f32>(1.0) / e, e > vec3<f32>(0.0));
+    let shadow = wpi_shadow(s.p);
+    let q = s.p + 0.001 * lpv_u.grids[0].w * lpv_u.size * s.n;
+    let v = lpv_sample(q, 0u);
+    let gi = clamp(lpv_toward(v, -s.n) * inv_e, vec3<f32>(0.0), vec3<f32>(1.0));
+    let back = 0.05 + min(2.0, max(dot(s.n, l), 0.0) / max(0.1, 1.0 - s.transmission));
+    let ti = back * clamp(lpv_toward(v, l) * inv_e, vec3<f32>(0.0), vec3<f32>(1.0)) * shadow;
+    let diffuse = clamp(dot(s.n, -l), 0.0, 1.0) * shadow;
+    var illum = vec3<f32>(diffuse) + (1.0 - diffuse) * gi;
+    illum = illum + (vec3<f32>(1.0) - illum) * ti;
+    let view = safe_normalize(frame.camera_pos - s.p, s.n);
+    let h = safe_normalize(view - l, s.n);
+    let p = phong_exponent(s.roughness);
+    let spec = (p + 8.0) / (8.0 * PI) * pow(clamp(dot(s.n, h), 0.0, 1.0), p) * clamp(dot(s.n, -l), 0.0, 1.0);
+    let has_sky = any(frame.ambient_sh[0].xyz != vec3<f32>(0.0));
+    let sky = select(vec3<f32>(0.0), 0.2 * env_lobe(0u, 0u, 0.0, s.n, 0.0), has_sky) * sky_visibility(s);
+    return s.diffuse * e / PI * illum + sky + s.f0 * spec * shadow * e;
+}
+
 fn source_vertex(p: vec3<f32>, vi: u32, ii: u32) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
@@ -100,6 +174,9 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     let indirect = s.diffuse / PI * e;
     if lpv_u.indirect_only == 1u {
         return indirect;
+    }
+    if lpv_u.mode == 2u && lpv_u.sun_dir.w > 0.5 {
+        return wpi_composite(s) + emission(in);
     }
     return indirect + sky_ambient(s) * sky_visibility(s) + emission(in);
 }

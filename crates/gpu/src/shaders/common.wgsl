@@ -73,6 +73,11 @@ struct LpvAmbientUniforms {
     pad1: u32,
     pad2: u32,
     grids: array<vec4<f32>, 4>,
+    // lpv-faithful's composite (App. B): the sun's direction of travel (w = 1: on), its
+    // irradiance (w: shadow bias in RSM depth), its RSM's view-projection.
+    sun_dir: vec4<f32>,
+    sun_e: vec4<f32>,
+    rsm_view_proj: mat4x4<f32>,
 }
 
 // One light. kind: 0 point, 1 spot, 2 directional, 3 area (a Lambertian rectangle: centre

@@ -19,6 +19,11 @@ pub(in crate::raster) struct LpvSource {
     sampler: wgpu::Sampler,
 }
 
+/// The report's shadow bias, in the RSM's depth (0..1 over the light's orthographic range): not
+/// stated (a global of its `defshade.c`). Two texels of a 1024² RSM: the range is about the
+/// view's width, so a texel is about 1/1024 of it.
+const COMPOSITE_SHADOW_BIAS: f32 = 2e-3;
+
 impl LpvSource {
     pub fn new(
         ctx: &GpuContext,
@@ -43,6 +48,11 @@ impl LpvSource {
         };
         for (k, grid) in volume.grids.iter().enumerate() {
             u.grids[k] = grid.origin.extend(grid.cell).to_array();
+        }
+        if let Some(l) = volume.composite_light() {
+            u.sun_dir = [l.axis[0], l.axis[1], l.axis[2], 1.0];
+            u.sun_e = [l.color[0], l.color[1], l.color[2], COMPOSITE_SHADOW_BIAS];
+            u.rsm_view_proj = l.view_proj;
         }
         let uniforms = ctx
             .device
@@ -72,6 +82,11 @@ impl LpvSource {
         }
     }
 
+    /// Whether the report's composite lights the frame (the light passes are skipped).
+    pub fn composite(&self) -> bool {
+        self.volume.composite_light().is_some() && !self.indirect_only
+    }
+
     pub fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
         let mut e = vec![
             entry(3, self.uniforms.as_entire_binding()),
@@ -79,6 +94,7 @@ impl LpvSource {
             entry(5, R::TextureView(&self.views[1])),
             entry(6, R::TextureView(&self.views[2])),
             entry(7, R::Sampler(&self.sampler)),
+            entry(11, R::TextureView(self.volume.rsm_position_view())),
         ];
         e.extend(self.sky.entries());
         e

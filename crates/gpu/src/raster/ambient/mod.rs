@@ -91,6 +91,11 @@ impl SourceKind {
                     filtered_texture(5, Dim::D3),
                     filtered_texture(6, Dim::D3),
                     sampler(7, Filtering),
+                    super::bindings::texture(
+                        11,
+                        wgpu::TextureSampleType::Float { filterable: false },
+                        Dim::D2,
+                    ),
                 ],
                 sky::layout_entries(),
             ]
@@ -184,6 +189,11 @@ impl AmbientSource {
     /// Whether only the volume's indirect light is drawn (no sky, no lights).
     pub fn indirect_only(&self) -> bool {
         matches!(self, AmbientSource::Lpv(l) if l.indirect_only)
+    }
+
+    /// Whether the source's own shading replaces the light passes (`lpv-faithful`'s composite).
+    pub fn composite(&self) -> bool {
+        matches!(self, AmbientSource::Lpv(l) if l.composite())
     }
 
     /// Timestamped passes this source records before the frame's: compressed SH relighting,
