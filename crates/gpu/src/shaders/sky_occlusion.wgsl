@@ -3,11 +3,11 @@
 // directions. Compiled after raster.wgsl, before the source's own WGSL; group 2, bindings 8–10.
 
 // One sky direction: its orthographic view-projection, the unit direction towards the sky and
-// the luminance of its cell's irradiance as nine SH coefficients (0–3, 4–7, 8).
+// its cell: the flux-weighted mean direction (xyz) and the luminance of E⊥ = Σ L·ΔΩ (w).
 struct SkyDir {
     view_proj: mat4x4<f32>,
     dir: vec4<f32>,
-    lum: array<vec4<f32>, 3>,
+    cell: vec4<f32>,
 }
 
 // x: directions (0: no occlusion), y: a map texel in world units, z: the scene's radius.
@@ -33,17 +33,15 @@ fn sky_visible(k: u32, p: vec3<f32>, ng: vec3<f32>) -> f32 {
 }
 
 // The fraction of the sky's irradiance at n that reaches p: Σ V_k E_k(n) / Σ E_k(n) by
-// luminance (1 without occlusion). Directions whose cell does not light n are not sampled.
+// luminance, E_k(n) = E⊥_k ⟨n, ω_k⟩₊ the cell as a small source (1 without occlusion).
+// Directions whose cell does not light n are not sampled.
 fn sky_visibility(s: Surface) -> f32 {
     let count = u32(sky.header.x);
-    let y = sh9(s.n);
-    let y0 = vec4<f32>(y[0], y[1], y[2], y[3]);
-    let y1 = vec4<f32>(y[4], y[5], y[6], y[7]);
     var all = 0.0;
     var seen = 0.0;
     for (var k = 0u; k < count; k++) {
-        let c = sky.dirs[k].lum;
-        let w = dot(c[0], y0) + dot(c[1], y1) + c[2].x * y[8];
+        let c = sky.dirs[k].cell;
+        let w = c.w * dot(s.n, c.xyz);
         if w > 0.0 {
             all += w;
             seen += w * sky_visible(k, s.p, s.ng);
