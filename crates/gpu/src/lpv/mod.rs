@@ -2,8 +2,9 @@
 //! propagation and the 3D textures the renderer's ambient pass reads (`Renderer::with_lpv`).
 //!
 //! Per frame, [`Lpv::record`] runs, for every RSM view (directional and spot lights, the six
-//! cube faces of a point light, and each emissive instance as a Lambertian area light seen from
-//! its centre; at most [`MAX_RSM_LIGHTS`]):
+//! cube faces of a point light, each emissive instance as a Lambertian area light seen from
+//! its centre, and the sky's cells as directional lights at a quarter of the side, in targets
+//! of their own; at most [`MAX_RSM_LIGHTS`]):
 //! 1. the RSM pass: flux, normal (+ diffuse transmission), position (+ texel area ⊥ the light);
 //! 2. injection (compute): Kaplanyan scatters every texel as a cosine lobe into fixed-point
 //!    atomics (WGSL has no float atomics) and, with occlusion, its blocker into the geometry
