@@ -21,9 +21,10 @@
 //!    `ρ_j·ΔE_j` joins j's unshot radiosity. Receivers within 3 group sizes are shot from the
 //!    group's patches one by one instead (the thesis's future work: "choose n by receiver
 //!    distance"); receivers farther than 3 block sizes share one visibility ray per n×n block
-//!    of their own (hierarchical receivers, which cuts the rays of a shot about n²-fold). The
-//!    group's unshot radiosity is then zero: absorbed energy leaves the system,
-//!    which guarantees progress.
+//!    of their own (hierarchical receivers, which cuts the rays of a shot about n²-fold).
+//!    Receiver clusters (planar faces, curved instances) that no source of the shot can reach
+//!    by the plane tests are skipped whole ([`Clusters`]). The group's unshot radiosity is
+//!    then zero: absorbed energy leaves the system, which guarantees progress.
 //! 3. The light-map value is `E/π` (incident irradiance over π): rendered radiance is
 //!    albedo × light-map, as Fuchs's "diffuse texture × light-map".
 //!
@@ -38,9 +39,12 @@
 //! above: CaLight's clamp over-counts patches near a grouped shooter, and a closed furnace
 //! then converges 4 % high instead of within 1 %; (e) there is no
 //! surface-to-surface PVS: the plane test is done per receiver (cosθ ≤ 0 skips) and the BVH
-//! makes a ray cheap.
+//! makes a ray cheap; (f) a receiver within 10 µm per metre of the source's plane, or a
+//! source that near the receiver's, counts as lying in it and gets nothing ([`plane_tol`]),
+//! where CaLight's exact sign test would let f32 rounding decide.
 //!
-//! Energy is accumulated in f64.
+//! Energy is accumulated in f64. During the shooting each block holds its members' radiosity,
+//! so a shot updates the blocks it reaches in parallel.
 
 use crate::texels::{TexelSample, Texels};
 use crate::{BakeError, LightMode, Progress};
@@ -51,6 +55,7 @@ use lightlab_trace::Accel;
 use lightlab_trace::lights::sample_punctual;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, BTreeSet};
 use std::f64::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -66,6 +71,15 @@ pub struct RadiositySettings {
     pub sky_samples: u32,
     /// Safety limit on shooting steps.
     pub max_shots: u64,
+    /// Skip, per shot, the receiver clusters that no source of the shot can reach (see
+    /// [`Clusters`]). The light-maps are the same bit for bit either way; off only to measure
+    /// what the culling saves.
+    #[serde(default = "yes")]
+    pub cull_clusters: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl Default for RadiositySettings {
@@ -76,6 +90,7 @@ impl Default for RadiositySettings {
             sun_samples: 16,
             sky_samples: 256,
             max_shots: 2_000_000,
+            cull_clusters: true,
         }
     }
 }
@@ -87,6 +102,7 @@ pub struct RadiosityStats {
     pub shots: u64,
     /// Patch-to-light and patch-to-patch transfers evaluated (each needs a visibility answer,
     /// some shared by a receiver block); the rays actually cast are `BakeStats::rays`.
+    /// Receivers in clusters that a shot cannot reach are not counted.
     pub transfers: u64,
     /// Unshot power left over total power emitted and reflected (a measure of convergence).
     pub unshot_fraction: f64,
@@ -130,7 +146,36 @@ pub fn solve(
             settings.stop
         )));
     }
-    // Patches and a texel → patch index per page.
+    let (patches, index) = make_patches(texels, valid);
+    let np = patches.len();
+    let mut s = Solver {
+        scene,
+        accel,
+        texels,
+        settings,
+        seed,
+        patches,
+        total: vec![DVec3::ZERO; np],
+        unshot: vec![DVec3::ZERO; np],
+        stats: RadiosityStats {
+            patches: np,
+            ..Default::default()
+        },
+    };
+    progress("radiosity: direct light", 0, np);
+    s.direct_light(&index, modes);
+    s.sky_light();
+    // Emitters: exitance π·L_e, shot like any radiosity.
+    for k in 0..np {
+        let e = s.sample(k).emission.as_dvec3() * PI;
+        s.unshot[k] += e;
+    }
+    s.shoot(progress)?;
+    Ok((to_pages(texels, &index, &s.total), s.stats))
+}
+
+/// One patch per valid texel with area, and a texel → patch index per page.
+fn make_patches(texels: &Texels, valid: &[Vec<bool>]) -> (Vec<Patch>, Vec<Vec<u32>>) {
     let mut patches: Vec<Patch> = vec![];
     let mut index: Vec<Vec<u32>> = vec![];
     for (pi, (page, valid)) in texels.pages.iter().zip(valid).enumerate() {
@@ -156,109 +201,129 @@ pub fn solve(
         }
         index.push(idx);
     }
-    let np = patches.len();
-    let mut stats = RadiosityStats {
-        patches: np,
-        ..Default::default()
-    };
-    // Incident irradiance counted in the light-map, and unshot radiosity.
-    let mut total = vec![DVec3::ZERO; np];
-    let mut unshot = vec![DVec3::ZERO; np];
-    let sample_of = |k: usize| -> &TexelSample {
-        let p = &patches[k];
-        let page = &texels.pages[p.page];
+    (patches, index)
+}
+
+/// The solver's state: incident irradiance counted in the light-map (`total`) and unshot
+/// radiosity per patch.
+struct Solver<'a> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    texels: &'a Texels,
+    settings: &'a RadiositySettings,
+    seed: u64,
+    patches: Vec<Patch>,
+    total: Vec<DVec3>,
+    unshot: Vec<DVec3>,
+    stats: RadiosityStats,
+}
+
+impl Solver<'_> {
+    fn sample(&self, k: usize) -> &TexelSample {
+        let p = &self.patches[k];
+        let page = &self.texels.pages[p.page];
         page.samples[(p.y * page.width + p.x) as usize]
             .as_ref()
             .expect("patches are valid texels")
-    };
+    }
 
-    // 1. Direct light.
-    progress("radiosity: direct light", 0, np);
-    let eps = |p: Vec3| 2e-5 * (1.0 + p.abs().max_element());
-    for (li, light) in scene.lights.iter().enumerate() {
-        let mode = modes.get(li).copied().unwrap_or(LightMode::Baked);
-        if mode == LightMode::Realtime {
-            continue;
-        }
-        let is_sun = matches!(light.kind, LightKind::Directional { .. });
-        let n_samples = if is_sun {
-            settings.sun_samples.max(1)
-        } else {
-            1
-        };
-        let de: Vec<DVec3> = (0..np)
-            .into_par_iter()
-            .map(|k| {
-                let pa = &patches[k];
-                let s = sample_of(k);
-                let mut rng = Rng::new(seed ^ ((li as u64 + 1) * 0x9e37), k as u64);
-                let mut sum = DVec3::ZERO;
-                for j in 0..n_samples {
-                    // Jitter across fully covered patches (CaLight samples the patch polygon).
-                    let p = if is_sun && s.coverage >= 0.999 && n_samples > 1 {
-                        let u = hammersley(j, n_samples) - 0.5;
-                        pa.p + s.dpdx * u.x + s.dpdy * u.y
-                    } else {
-                        pa.p
-                    };
-                    let Some(ls) = sample_punctual(scene, li, p, rng.next_vec2()) else {
-                        continue;
-                    };
-                    let cos = pa.n.dot(ls.wi);
-                    if cos <= 0.0 || ls.wi.dot(pa.ng) <= 0.0 {
-                        continue;
-                    }
-                    let o = p + pa.ng * eps(p);
-                    let (dir, tmax) = if ls.dist.is_finite() {
-                        (p + ls.wi * ls.dist - o, 1.0 - 1e-4)
-                    } else {
-                        (ls.wi, f32::INFINITY)
-                    };
-                    if accel.occluded(o, dir, tmax) {
-                        continue;
-                    }
-                    let mut v = ls.value.as_dvec3() * cos as f64;
-                    if ls.dist.is_finite() {
-                        // CaLight's near-field guard: below one patch size, d := patch size and
-                        // the cosine is dropped.
-                        let size = pa.area.sqrt();
-                        let d = ls.dist as f64;
-                        if d < size {
-                            v = ls.value.as_dvec3() * (d * d) / (size * size);
-                        }
-                    }
-                    sum += v;
-                }
-                sum / n_samples as f64
-            })
-            .collect();
-        let de = if is_sun {
-            smooth(&patches, &index, texels, de)
-        } else {
-            de
-        };
-        stats.transfers += (np as u64) * n_samples as u64;
-        for k in 0..np {
-            if mode == LightMode::Baked {
-                total[k] += de[k];
+    /// Step 1 for the punctual lights and the sun.
+    fn direct_light(&mut self, index: &[Vec<u32>], modes: &[LightMode]) {
+        let np = self.patches.len();
+        for li in 0..self.scene.lights.len() {
+            let mode = modes.get(li).copied().unwrap_or(LightMode::Baked);
+            if mode == LightMode::Realtime {
+                continue;
             }
-            unshot[k] += patches[k].rho * de[k];
+            let is_sun = matches!(self.scene.lights[li].kind, LightKind::Directional { .. });
+            let n_samples = if is_sun {
+                self.settings.sun_samples.max(1)
+            } else {
+                1
+            };
+            let de: Vec<DVec3> = (0..np)
+                .into_par_iter()
+                .map(|k| self.direct_at(k, li, is_sun, n_samples))
+                .collect();
+            let de = if is_sun {
+                smooth(&self.patches, index, self.texels, de)
+            } else {
+                de
+            };
+            self.stats.transfers += (np as u64) * n_samples as u64;
+            for (k, de) in de.into_iter().enumerate() {
+                if mode == LightMode::Baked {
+                    self.total[k] += de;
+                }
+                self.unshot[k] += self.patches[k].rho * de;
+            }
         }
     }
-    if let Some(env) = &scene.environment {
-        let n = settings.sky_samples.max(1);
+
+    /// Irradiance from light `li` at patch `k`, averaged over `n_samples` points.
+    fn direct_at(&self, k: usize, li: usize, is_sun: bool, n_samples: u32) -> DVec3 {
+        let pa = &self.patches[k];
+        let s = self.sample(k);
+        let mut rng = Rng::new(self.seed ^ ((li as u64 + 1) * 0x9e37), k as u64);
+        let mut sum = DVec3::ZERO;
+        for j in 0..n_samples {
+            // Jitter across fully covered patches (CaLight samples the patch polygon).
+            let p = if is_sun && s.coverage >= 0.999 && n_samples > 1 {
+                let u = hammersley(j, n_samples) - 0.5;
+                pa.p + s.dpdx * u.x + s.dpdy * u.y
+            } else {
+                pa.p
+            };
+            let Some(ls) = sample_punctual(self.scene, li, p, rng.next_vec2()) else {
+                continue;
+            };
+            let cos = pa.n.dot(ls.wi);
+            if cos <= 0.0 || ls.wi.dot(pa.ng) <= 0.0 {
+                continue;
+            }
+            let o = p + pa.ng * ray_eps(p);
+            let (dir, tmax) = if ls.dist.is_finite() {
+                (p + ls.wi * ls.dist - o, 1.0 - 1e-4)
+            } else {
+                (ls.wi, f32::INFINITY)
+            };
+            if self.accel.occluded(o, dir, tmax) {
+                continue;
+            }
+            let mut v = ls.value.as_dvec3() * cos as f64;
+            if ls.dist.is_finite() {
+                // CaLight's near-field guard: below one patch size, d := patch size and the
+                // cosine is dropped.
+                let size = pa.area.sqrt();
+                let d = ls.dist as f64;
+                if d < size {
+                    v = ls.value.as_dvec3() * (d * d) / (size * size);
+                }
+            }
+            sum += v;
+        }
+        sum / n_samples as f64
+    }
+
+    /// Step 1 for the environment: cosine-distributed rays per patch.
+    fn sky_light(&mut self) {
+        let Some(env) = &self.scene.environment else {
+            return;
+        };
+        let np = self.patches.len();
+        let n = self.settings.sky_samples.max(1);
         let de: Vec<DVec3> = (0..np)
             .into_par_iter()
             .map(|k| {
-                let pa = &patches[k];
-                let mut rng = Rng::new(seed ^ 0x5c1e5, k as u64);
+                let pa = &self.patches[k];
+                let mut rng = Rng::new(self.seed ^ 0x5c1e5, k as u64);
                 let off = rng.next_vec2();
                 let frame = Frame::from_normal(pa.n);
-                let o = pa.p + pa.ng * eps(pa.p);
+                let o = pa.p + pa.ng * ray_eps(pa.p);
                 let mut sum = DVec3::ZERO;
                 for j in 0..n {
                     let d = frame.to_world(cosine_hemisphere((hammersley(j, n) + off).fract_gl()));
-                    if d.dot(pa.ng) <= 0.0 || accel.occluded(o, d, f32::INFINITY) {
+                    if d.dot(pa.ng) <= 0.0 || self.accel.occluded(o, d, f32::INFINITY) {
                         continue;
                     }
                     sum += env.radiance(d).as_dvec3();
@@ -266,193 +331,332 @@ pub fn solve(
                 sum * PI / n as f64
             })
             .collect();
-        stats.transfers += np as u64 * n as u64;
-        for k in 0..np {
-            total[k] += de[k];
-            unshot[k] += patches[k].rho * de[k];
+        self.stats.transfers += np as u64 * n as u64;
+        for (k, de) in de.into_iter().enumerate() {
+            self.total[k] += de;
+            self.unshot[k] += self.patches[k].rho * de;
         }
     }
-    // Emitters: exitance π·L_e, shot like any radiosity.
-    for (k, u) in unshot.iter_mut().enumerate() {
-        *u += sample_of(k).emission.as_dvec3() * PI;
-    }
 
-    // 2. Progressive refinement.
-    let key = |u: DVec3| u.x + u.y + u.z;
-    let initial_max = unshot.iter().map(|&u| key(u)).fold(0.0, f64::max);
-    let mut emitted_power: f64 = (0..np).map(|k| key(unshot[k]) * patches[k].area).sum();
-    if initial_max <= 0.0 {
-        return Ok((to_pages(texels, &index, &total), stats));
+    /// Step 2: progressive refinement until the threshold or the shot limit.
+    fn shoot(&mut self, progress: Progress) -> Result<(), BakeError> {
+        let np = self.patches.len();
+        let initial_max = self.unshot.iter().map(|&u| key(u)).fold(0.0, f64::max);
+        if initial_max <= 0.0 {
+            return Ok(());
+        }
+        let emitted_power: f64 = (0..np)
+            .map(|k| key(self.unshot[k]) * self.patches[k].area)
+            .sum();
+        let threshold = self.settings.stop * initial_max;
+        let mut select = Selector::new(&self.patches, &self.unshot, threshold);
+        let mut blocks = make_blocks(&self.patches, self.settings.block_size);
+        blocks.load(&self.total, &self.unshot);
+        let clusters = Clusters::new(&self.patches, &blocks.list);
+        let mut alive = vec![true; blocks.list.len()];
+        let mut rng = Rng::new(self.seed, 0x5407);
+        let mut shots = 0u64;
+        while let Some(shooter) = select.next(&blocks, &mut rng) {
+            if shots >= self.settings.max_shots {
+                self.stats.hit_shot_limit = true;
+                break;
+            }
+            let b = blocks.id[shooter] as usize;
+            let (whole, members) = blocks.list[b].sources(&self.patches, shooter);
+            self.stats.transfers +=
+                clusters.reachable((&whole, &members), self.settings.cull_clusters, &mut alive);
+            let group = &mut blocks.list[b];
+            for (u, &j) in group.unshot.iter_mut().zip(&group.members) {
+                *u = DVec3::ZERO;
+                select.shot(j);
+            }
+            let crossed = receive(
+                self.accel,
+                &mut blocks.list,
+                &alive,
+                (&whole, &members),
+                select.threshold,
+            );
+            for j in crossed {
+                select.crossed(j);
+            }
+            shots += 1;
+            if shots.is_multiple_of(64) && !progress("radiosity: shooting", shots as usize, 0) {
+                return Err(BakeError::Cancelled);
+            }
+        }
+        blocks.store(&mut self.total, &mut self.unshot);
+        let left: f64 = (0..np)
+            .map(|k| key(self.unshot[k]) * self.patches[k].area)
+            .sum();
+        self.stats.shots = shots;
+        self.stats.unshot_fraction = left / emitted_power.max(1e-300);
+        Ok(())
     }
-    let threshold = settings.stop * initial_max;
-    // Surfaces: patches per instance.
-    let mut surfaces: Vec<Vec<u32>> = vec![];
-    {
-        let mut by_inst: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+}
+
+/// Sum of the channels: the shooting's measure of unshot radiosity.
+fn key(u: DVec3) -> f64 {
+    u.x + u.y + u.z
+}
+
+/// CaLight's shooter selection. Surfaces are the instances' patches, in instance order.
+struct Selector {
+    surfaces: Vec<Vec<u32>>,
+    surface_of: Vec<u32>,
+    /// Per surface, its patches whose unshot radiosity is at or above the threshold, which is
+    /// all the full search needs to read. Unshot radiosity only grows until the patch is shot,
+    /// so a patch joins once, when it crosses the threshold, and leaves when it is shot.
+    above: Vec<BTreeSet<u32>>,
+    threshold: f64,
+}
+
+impl Selector {
+    fn new(patches: &[Patch], unshot: &[DVec3], threshold: f64) -> Selector {
+        let mut by_inst: BTreeMap<u32, Vec<u32>> = Default::default();
         for (k, p) in patches.iter().enumerate() {
             by_inst.entry(p.instance).or_default().push(k as u32);
         }
-        surfaces.extend(by_inst.into_values());
-    }
-    let n = settings.block_size;
-    // Blocks: n×n texels of one instance with similar normals. They group shooters (CaLight's
-    // BlockSize) and, for far shooters, receivers.
-    let mut block_id = vec![0u32; np];
-    let blocks: Vec<Block> = {
-        let mut map: std::collections::HashMap<(usize, u32, u32, u32), usize> = Default::default();
-        let mut blocks: Vec<Block> = vec![];
-        for (k, p) in patches.iter().enumerate() {
-            let key = (p.page, p.x / n, p.y / n, p.instance);
-            let slot = map
-                .get(&key)
-                .copied()
-                .filter(|&b| blocks[b].ng.dot(p.ng) > 0.9);
-            let b = match slot {
-                Some(b) => b,
-                None => {
-                    blocks.push(Block {
-                        members: vec![],
-                        centre: Vec3::ZERO,
-                        ng: p.ng,
-                        area: 0.0,
-                    });
-                    map.insert(key, blocks.len() - 1);
-                    blocks.len() - 1
+        let surfaces: Vec<Vec<u32>> = by_inst.into_values().collect();
+        let mut surface_of = vec![0u32; patches.len()];
+        let mut above = vec![BTreeSet::new(); surfaces.len()];
+        for (si, surf) in surfaces.iter().enumerate() {
+            for &k in surf {
+                surface_of[k as usize] = si as u32;
+                if key(unshot[k as usize]) >= threshold {
+                    above[si].insert(k);
                 }
-            };
-            block_id[k] = b as u32;
-            blocks[b].members.push(k as u32);
-            blocks[b].centre += p.p;
-            blocks[b].area += p.area;
+            }
         }
-        for b in &mut blocks {
-            b.centre /= b.members.len() as f32;
+        Selector {
+            surfaces,
+            surface_of,
+            above,
+            threshold,
         }
-        blocks
-    };
-    let block_of = |k: usize| -> &[u32] { &blocks[block_id[k] as usize].members };
-    let block_value = |k: usize, unshot: &[DVec3]| -> f64 {
-        let b = block_of(k);
-        b.iter().map(|&j| key(unshot[j as usize])).sum::<f64>() / b.len() as f64
-    };
-    let mut rng = Rng::new(seed, 0x5407);
-    let mut shots = 0u64;
-    loop {
-        // Select: random blocks per surface, the best of all.
+    }
+
+    /// The next shooter (a patch; its block shoots): random blocks per surface, the best of
+    /// all; below the threshold a full search, the best patch of the first surface that holds
+    /// one above it; `None` when no patch does.
+    fn next(&self, blocks: &Blocks, rng: &mut Rng) -> Option<usize> {
+        let block_value = |k: usize| -> f64 {
+            let u = &blocks.list[blocks.id[k] as usize].unshot;
+            u.iter().map(|&u| key(u)).sum::<f64>() / u.len() as f64
+        };
         let mut best = (0.0f64, usize::MAX);
-        for surf in &surfaces {
+        for surf in &self.surfaces {
             let samples = 10.min((surf.len() / 2).max(1));
             for _ in 0..samples {
                 let k = surf[(rng.next_u32() as usize) % surf.len()] as usize;
-                let v = block_value(k, &unshot);
+                let v = block_value(k);
                 if v > best.0 {
                     best = (v, k);
                 }
             }
         }
-        if best.0 < threshold {
-            // Full search: the best patch of the first surface that holds one above threshold.
-            best = (0.0, usize::MAX);
-            for surf in &surfaces {
-                for &k in surf {
-                    let v = key(unshot[k as usize]);
-                    if v >= threshold && v > best.0 {
-                        best = (v, k as usize);
-                    }
-                }
-                if best.1 != usize::MAX {
-                    break;
-                }
-            }
-            if best.1 == usize::MAX {
-                break;
+        if best.0 >= self.threshold {
+            return Some(best.1);
+        }
+        let set = self.above.iter().find(|s| !s.is_empty())?;
+        best = (0.0, usize::MAX);
+        for &k in set {
+            let v = key(blocks.unshot(k as usize));
+            if v > best.0 {
+                best = (v, k as usize);
             }
         }
-        if shots >= settings.max_shots {
-            stats.hit_shot_limit = true;
-            break;
-        }
-        // Group and shoot.
-        let group = &blocks[block_id[best.1] as usize];
-        let (c, area) = (group.centre, group.area);
-        let members: Vec<(Vec3, Vec3, Vec3, f64, DVec3)> = group
-            .members
-            .iter()
-            .map(|&j| {
-                let q = &patches[j as usize];
-                (q.p, q.n, q.ng, q.area, unshot[j as usize])
-            })
-            .collect();
-        let power: DVec3 = members.iter().map(|m| m.4 * m.3).sum();
-        let nrm = members
-            .iter()
-            .map(|m| m.1.as_dvec3())
-            .sum::<DVec3>()
-            .normalize_or_zero()
-            .as_vec3();
-        let ng = patches[best.1].ng;
-        for &j in &group.members {
-            unshot[j as usize] = DVec3::ZERO;
-        }
-        // Receivers closer than `NEAR` group sizes get the members' own shots (the thesis's
-        // future work "choose n by receiver distance"); the rest get the group's.
-        let near2 = NEAR * NEAR * area;
-        let o = c + ng * ray_eps(c);
-        let shoot_one = |j: usize, vis: Option<bool>| -> Option<(usize, DVec3)> {
-            let q = &patches[j];
-            let far = ((q.p - c).length_squared() as f64) >= near2 || members.len() == 1;
-            let e = if far {
-                transfer(accel, (c, nrm, ng, area), power / area, q, vis)?
-            } else {
-                let mut e = DVec3::ZERO;
-                for m in &members {
-                    if let Some(v) = transfer(accel, (m.0, m.1, m.2, m.3), m.4, q, None) {
-                        e += v;
-                    }
-                }
-                e
-            };
-            (e != DVec3::ZERO).then_some((j, e))
+        Some(best.1)
+    }
+
+    /// Patch `k` was shot (its unshot radiosity is zero).
+    fn shot(&mut self, k: u32) {
+        self.above[self.surface_of[k as usize] as usize].remove(&k);
+    }
+
+    /// Patch `k` received and its unshot radiosity crossed the threshold.
+    fn crossed(&mut self, k: u32) {
+        self.above[self.surface_of[k as usize] as usize].insert(k);
+    }
+}
+
+/// Blocks of n×n texels of one instance with similar normals. They group shooters (CaLight's
+/// BlockSize) and, for far shooters, receivers; during the shooting they hold their members'
+/// radiosity, so that a shot updates the blocks it reaches in parallel.
+struct Blocks {
+    list: Vec<Block>,
+    /// Each patch's block, and its place among the block's members.
+    id: Vec<u32>,
+    pos: Vec<u32>,
+}
+
+fn make_blocks(patches: &[Patch], n: u32) -> Blocks {
+    let mut id = vec![0u32; patches.len()];
+    let mut pos = vec![0u32; patches.len()];
+    let mut map: std::collections::HashMap<(usize, u32, u32, u32), usize> = Default::default();
+    let mut list: Vec<Block> = vec![];
+    for (k, p) in patches.iter().enumerate() {
+        let key = (p.page, p.x / n, p.y / n, p.instance);
+        let slot = map
+            .get(&key)
+            .copied()
+            .filter(|&b| list[b].ng.dot(p.ng) > 0.9);
+        let b = match slot {
+            Some(b) => b,
+            None => {
+                list.push(Block {
+                    members: vec![],
+                    centre: Vec3::ZERO,
+                    ng: p.ng,
+                    area: 0.0,
+                    recv: vec![],
+                    total: vec![],
+                    unshot: vec![],
+                });
+                map.insert(key, list.len() - 1);
+                list.len() - 1
+            }
         };
-        let de: Vec<(usize, DVec3)> = blocks
-            .par_iter()
-            .flat_map_iter(|b| {
-                // Far receiver blocks share one visibility ray (hierarchical receivers).
-                let d2 = (b.centre - c).length_squared() as f64;
-                let shared = b.members.len() > 1 && d2 >= NEAR * NEAR * (area + b.area);
-                let vis = if shared {
-                    let r = b.centre - c;
-                    if r.dot(ng) <= 0.0 || -r.dot(b.ng) <= 0.0 {
-                        Some(false)
-                    } else {
-                        let target = b.centre + b.ng * ray_eps(b.centre);
-                        Some(!accel.occluded(o, target - o, 1.0 - 1e-4))
-                    }
-                } else {
-                    None
-                };
-                let shoot_one = &shoot_one;
-                b.members.iter().filter_map(move |&j| match vis {
-                    Some(false) => None,
-                    v => shoot_one(j as usize, v.map(|_| true)),
-                })
-            })
-            .collect();
-        stats.transfers += np as u64;
-        for (j, e) in de {
-            total[j] += e;
-            unshot[j] += patches[j].rho * e;
-        }
-        shots += 1;
-        if shots.is_multiple_of(64) && !progress("radiosity: shooting", shots as usize, 0) {
-            return Err(BakeError::Cancelled);
+        id[k] = b as u32;
+        pos[k] = list[b].members.len() as u32;
+        list[b].members.push(k as u32);
+        list[b].recv.push(Receiver {
+            p: p.p,
+            n: p.n,
+            ng: p.ng,
+            rho: p.rho,
+        });
+        list[b].centre += p.p;
+        list[b].area += p.area;
+    }
+    for b in &mut list {
+        b.centre /= b.members.len() as f32;
+    }
+    Blocks { list, id, pos }
+}
+
+impl Blocks {
+    /// Take the patches' radiosity into the blocks.
+    fn load(&mut self, total: &[DVec3], unshot: &[DVec3]) {
+        for b in &mut self.list {
+            b.total = b.members.iter().map(|&k| total[k as usize]).collect();
+            b.unshot = b.members.iter().map(|&k| unshot[k as usize]).collect();
         }
     }
-    let left: f64 = (0..np).map(|k| key(unshot[k]) * patches[k].area).sum();
-    emitted_power = emitted_power.max(1e-300);
-    stats.shots = shots;
-    stats.unshot_fraction = left / emitted_power;
-    Ok((to_pages(texels, &index, &total), stats))
+
+    /// Give it back.
+    fn store(&self, total: &mut [DVec3], unshot: &mut [DVec3]) {
+        for b in &self.list {
+            for (i, &k) in b.members.iter().enumerate() {
+                total[k as usize] = b.total[i];
+                unshot[k as usize] = b.unshot[i];
+            }
+        }
+    }
+
+    fn unshot(&self, k: usize) -> DVec3 {
+        self.list[self.id[k] as usize].unshot[self.pos[k] as usize]
+    }
+}
+
+/// A shooting source: a patch, or a whole block as one (centre, mean normal, summed area).
+struct Source {
+    p: Vec3,
+    n: Vec3,
+    ng: Vec3,
+    area: f64,
+    /// Unshot radiosity.
+    u: DVec3,
+    /// Distance from a plane below which a point counts as lying in it ([`plane_tol`]).
+    tol: f32,
+}
+
+impl Source {
+    fn new(p: Vec3, n: Vec3, ng: Vec3, area: f64, u: DVec3) -> Source {
+        Source {
+            p,
+            n,
+            ng,
+            area,
+            u,
+            tol: plane_tol(p),
+        }
+    }
+}
+
+/// Points nearer than this to a source's plane, or a source this near a receiver's plane, do
+/// not exchange light: 10 µm per metre of the source's distance from the origin. The rounding
+/// of `transfer`'s dot products stays below 0.5 µm per metre of coordinates and
+/// [`Cluster::missed_by`] allows 2, so coplanar patches are told apart from facing ones
+/// robustly and a shooter's own face can be culled.
+fn plane_tol(p: Vec3) -> f32 {
+    1e-5 * (1.0 + p.abs().max_element())
+}
+
+/// Shoot: the receivers of the blocks flagged `alive` get their irradiance from one shot (far
+/// receivers from the `whole` group, receivers within `NEAR` group sizes from its `members`
+/// one by one: the thesis's future work "choose n by receiver distance"); far receiver blocks
+/// share one visibility ray (hierarchical receivers). Returns the patches whose unshot
+/// radiosity crossed `threshold`.
+fn receive(
+    accel: &Accel,
+    blocks: &mut [Block],
+    alive: &[bool],
+    (whole, members): (&Source, &[Source]),
+    threshold: f64,
+) -> Vec<u32> {
+    let (c, ng, area) = (whole.p, whole.ng, whole.area);
+    let near2 = NEAR * NEAR * area;
+    let o = c + ng * ray_eps(c);
+    let shoot_one = |q: &Receiver, vis: Option<bool>| -> Option<DVec3> {
+        let far = ((q.p - c).length_squared() as f64) >= near2 || members.len() == 1;
+        let e = if far {
+            transfer(accel, whole, q, vis)?
+        } else {
+            let mut e = DVec3::ZERO;
+            for m in members {
+                if let Some(v) = transfer(accel, m, q, None) {
+                    e += v;
+                }
+            }
+            e
+        };
+        (e != DVec3::ZERO).then_some(e)
+    };
+    blocks
+        .par_iter_mut()
+        .zip(alive)
+        .filter(|(_, alive)| **alive)
+        .flat_map_iter(|(b, _)| {
+            let d2 = (b.centre - c).length_squared() as f64;
+            let shared = b.members.len() > 1 && d2 >= NEAR * NEAR * (area + b.area);
+            let vis = if shared {
+                let r = b.centre - c;
+                if r.dot(ng) <= 0.0 || -r.dot(b.ng) <= 0.0 {
+                    return vec![];
+                }
+                let target = b.centre + b.ng * ray_eps(b.centre);
+                if accel.occluded(o, target - o, 1.0 - 1e-4) {
+                    return vec![];
+                }
+                Some(true)
+            } else {
+                None
+            };
+            let mut crossed = vec![];
+            for (i, (&j, q)) in b.members.iter().zip(&b.recv).enumerate() {
+                if let Some(e) = shoot_one(q, vis) {
+                    let before = key(b.unshot[i]);
+                    b.total[i] += e;
+                    b.unshot[i] += q.rho * e;
+                    if before < threshold && key(b.unshot[i]) >= threshold {
+                        crossed.push(j);
+                    }
+                }
+            }
+            crossed
+        })
+        .collect()
 }
 
 /// An n×n block of patches of one instance with similar normals: a shooter group, and for
@@ -462,6 +666,200 @@ struct Block {
     centre: Vec3,
     ng: Vec3,
     area: f64,
+    /// The members as receivers, and their irradiance and unshot radiosity while shooting
+    /// (kept with the block for locality).
+    recv: Vec<Receiver>,
+    total: Vec<DVec3>,
+    unshot: Vec<DVec3>,
+}
+
+/// What a shot reads of a receiving patch.
+struct Receiver {
+    p: Vec3,
+    n: Vec3,
+    ng: Vec3,
+    rho: DVec3,
+}
+
+impl Block {
+    /// The sources of a shot from this block, selected through its patch `shooter`: the block
+    /// as one (centre, mean shading normal, the shooter's geometric normal, summed power over
+    /// summed area) and its members one by one.
+    fn sources(&self, patches: &[Patch], shooter: usize) -> (Source, Vec<Source>) {
+        let members: Vec<Source> = self
+            .members
+            .iter()
+            .zip(&self.unshot)
+            .map(|(&j, &u)| {
+                let q = &patches[j as usize];
+                Source::new(q.p, q.n, q.ng, q.area, u)
+            })
+            .collect();
+        let power: DVec3 = members.iter().map(|m| m.u * m.area).sum();
+        let nrm = members
+            .iter()
+            .map(|m| m.n.as_dvec3())
+            .sum::<DVec3>()
+            .normalize_or_zero()
+            .as_vec3();
+        let ng = patches[shooter].ng;
+        let whole = Source::new(self.centre, nrm, ng, self.area, power / self.area);
+        (whole, members)
+    }
+}
+
+/// Receiver clusters for culling: the blocks of one instance whose geometric normals fall in
+/// one cell of a coarse grid of directions (one planar face), or all the blocks of a curved
+/// instance (more than [`CURVED_FACES`] such cells). A shot skips a cluster when every one of
+/// its sources fails [`transfer`]'s own plane tests for every point of the cluster: the
+/// cluster's box lies behind the source's plane, or the source lies behind the plane of every
+/// member (bounded through the face's normal and its members' largest deviation from it).
+/// These bounds are conservative, with a margin above f32 rounding, so culling changes which
+/// receivers are visited and not one bit of the result.
+struct Clusters {
+    list: Vec<Cluster>,
+}
+
+struct Cluster {
+    blocks: Vec<u32>,
+    /// Patches in the blocks.
+    members: u64,
+    lo: Vec3,
+    hi: Vec3,
+    /// For a planar face: its mean geometric normal `axis`, the largest |ng − axis| of a
+    /// member, and the range of p·axis over the members.
+    plane: Option<Plane>,
+}
+
+struct Plane {
+    axis: Vec3,
+    spread: f32,
+    min: f32,
+    max: f32,
+}
+
+/// An instance whose blocks face more direction cells than this is one curved cluster.
+const CURVED_FACES: usize = 64;
+
+impl Clusters {
+    fn new(patches: &[Patch], blocks: &[Block]) -> Clusters {
+        let cell = |n: Vec3| -> (i32, i32, i32) {
+            let q = (n * 4.0).round();
+            (q.x as i32, q.y as i32, q.z as i32)
+        };
+        type Faces = BTreeMap<(i32, i32, i32), Vec<u32>>;
+        let mut by_inst: BTreeMap<u32, Faces> = BTreeMap::new();
+        for (bi, b) in blocks.iter().enumerate() {
+            let inst = patches[b.members[0] as usize].instance;
+            by_inst
+                .entry(inst)
+                .or_default()
+                .entry(cell(b.ng))
+                .or_default()
+                .push(bi as u32);
+        }
+        let mut list = vec![];
+        for faces in by_inst.into_values() {
+            if faces.len() > CURVED_FACES {
+                let all: Vec<u32> = faces.into_values().flatten().collect();
+                list.push(Cluster::new(patches, blocks, all, false));
+            } else {
+                for f in faces.into_values() {
+                    list.push(Cluster::new(patches, blocks, f, true));
+                }
+            }
+        }
+        Clusters { list }
+    }
+
+    /// Flag in `alive` the blocks of the clusters that some source of a shot can reach (all of
+    /// them when `cull` is off); returns how many patches they hold.
+    fn reachable(
+        &self,
+        (whole, members): (&Source, &[Source]),
+        cull: bool,
+        alive: &mut [bool],
+    ) -> u64 {
+        let mut count = 0;
+        for c in &self.list {
+            let reached = !(cull && c.missed_by(whole) && members.iter().all(|m| c.missed_by(m)));
+            for &b in &c.blocks {
+                alive[b as usize] = reached;
+            }
+            if reached {
+                count += c.members;
+            }
+        }
+        count
+    }
+}
+
+impl Cluster {
+    fn new(patches: &[Patch], blocks: &[Block], ids: Vec<u32>, planar: bool) -> Cluster {
+        let members = || {
+            ids.iter()
+                .flat_map(|&b| blocks[b as usize].members.iter())
+                .map(|&k| &patches[k as usize])
+        };
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        let (mut nsum, mut count) = (Vec3::ZERO, 0);
+        for q in members() {
+            count += 1;
+            lo = lo.min(q.p);
+            hi = hi.max(q.p);
+            nsum += q.ng;
+        }
+        let plane = planar.then(|| {
+            let axis = nsum.normalize_or_zero();
+            let (mut spread, mut min, mut max) = (0.0f32, f32::INFINITY, f32::NEG_INFINITY);
+            for q in members() {
+                spread = spread.max((q.ng - axis).length());
+                min = min.min(q.p.dot(axis));
+                max = max.max(q.p.dot(axis));
+            }
+            Plane {
+                axis,
+                spread,
+                min,
+                max,
+            }
+        });
+        Cluster {
+            blocks: ids,
+            members: count,
+            lo,
+            hi,
+            plane,
+        }
+    }
+
+    /// Whether `transfer` from source `s` returns nothing for every member, by its tests
+    /// r·ng_s ≤ tol (the receiver behind or in the source's plane) or −r·ng_q ≤ tol (the
+    /// source behind or in the receiver's), r = q − s. Bounds on those dot products over the
+    /// cluster must stay below `tol` by more than the f32 rounding of `transfer`'s own
+    /// arithmetic (`slack`).
+    fn missed_by(&self, s: &Source) -> bool {
+        let reach = self.lo.abs().max(self.hi.abs()).max_element();
+        let slack = 2e-6 * (reach + s.p.abs().max_element() + 1.0);
+        let limit = s.tol - slack;
+        // Largest |q − s| over the box.
+        let far = (self.lo - s.p).abs().max((self.hi - s.p).abs()).length();
+        // Largest (q − s)·ng_s: over the box, and for a face through its plane.
+        let (a, b) = ((self.lo - s.p) * s.ng, (self.hi - s.p) * s.ng);
+        let mut front = a.max(b).element_sum();
+        if let Some(pl) = &self.plane {
+            // (q − s)·ng_s = (q − s)·axis + (q − s)·(ng_s − axis).
+            let d = (s.ng - pl.axis).length();
+            front = front.min(pl.max - s.p.dot(pl.axis) + far * d);
+        }
+        if front <= limit {
+            return true;
+        }
+        // Largest (s − q)·ng_q ≤ (s − q)·axis + |s − q|·spread.
+        self.plane
+            .as_ref()
+            .is_some_and(|pl| s.p.dot(pl.axis) - pl.min + far * pl.spread <= limit)
+    }
 }
 
 /// Receivers nearer than this many group sizes (√A) are shot from the group's patches.
@@ -471,28 +869,24 @@ fn ray_eps(p: Vec3) -> f32 {
     2e-5 * (1.0 + p.abs().max_element())
 }
 
-/// Irradiance that a source (point, shading normal, geometric normal, area) with unshot
-/// radiosity `u` delivers to patch `q`: `u·F`, `F = A·cosθ_s·cosθ_q/(π r² + A)`, zero when
-/// either faces away or the centre-to-centre ray is blocked.
-fn transfer(
-    accel: &Accel,
-    (sp, sn, sng, area): (Vec3, Vec3, Vec3, f64),
-    u: DVec3,
-    q: &Patch,
-    visible: Option<bool>,
-) -> Option<DVec3> {
-    let r = q.p - sp;
+/// Irradiance that source `s` with unshot radiosity `s.u` delivers to patch `q`: `u·F`,
+/// `F = A·cosθ_s·cosθ_q/(π r² + A)`, zero when either faces away (or lies in the other's
+/// plane, within `s.tol`) or the centre-to-centre ray is blocked (`visible` answers that when
+/// it is known).
+#[inline]
+fn transfer(accel: &Accel, s: &Source, q: &Receiver, visible: Option<bool>) -> Option<DVec3> {
+    let r = q.p - s.p;
     let r2 = r.length_squared() as f64;
     if r2 <= 0.0 {
         return None;
     }
-    let cos_s = sn.dot(r) as f64;
+    let cos_s = s.n.dot(r) as f64;
     let cos_q = -(q.n.dot(r)) as f64;
-    if cos_s <= 0.0 || cos_q <= 0.0 || r.dot(sng) <= 0.0 || -r.dot(q.ng) <= 0.0 {
+    if cos_s <= 0.0 || cos_q <= 0.0 || r.dot(s.ng) <= s.tol || -r.dot(q.ng) <= s.tol {
         return None;
     }
     let visible = visible.unwrap_or_else(|| {
-        let o = sp + sng * ray_eps(sp);
+        let o = s.p + s.ng * ray_eps(s.p);
         let target = q.p + q.ng * ray_eps(q.p);
         !accel.occluded(o, target - o, 1.0 - 1e-4)
     });
@@ -503,8 +897,8 @@ fn transfer(
     let g = cos_s * cos_q / (r2 * r2);
     // Wallace et al.'s disc form factor A·cos·cos/(π r² + A): finite as r → 0, where
     // CaLight's clamp r ≥ √A with min(F, 1) over-counts near neighbours.
-    let f = area * g * r2 / (PI * r2 + area);
-    Some(u * f)
+    let f = s.area * g * r2 / (PI * r2 + s.area);
+    Some(s.u * f)
 }
 
 /// CaLight's sun smoothing: a weighted 3×3 average over valid patches of the same instance

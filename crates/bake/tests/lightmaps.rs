@@ -451,3 +451,43 @@ fn gltf_export_renders_like_the_bake() {
     println!("glTF export vs bake: relMSE {e:.2e}");
     assert!(e < 1e-6, "relMSE {e}");
 }
+
+/// Culling the receiver clusters that a shot cannot reach skips work and changes nothing: the
+/// light-maps are the same bit for bit with culling on and off, on a room of planar faces (where
+/// it skips more than half the transfers: a shooter's own face, the faces behind it) and on a
+/// scene with curved knots on a plane (`prt`), and it always skips some.
+#[test]
+fn radiosity_cluster_culling_is_exact() {
+    for (name, tpm, stop, most) in [("room", 5.0, 1e-3, 0.5), ("prt", 4.0, 1e-2, 1.0)] {
+        let scene = lightlab_scene::builtin::builtin(name).unwrap();
+        let mut s = settings(Method::Radiosity, tpm, 1);
+        s.radiosity.sky_samples = 16;
+        s.radiosity.sun_samples = 4;
+        s.radiosity.stop = stop;
+        let on = bake_lightmaps(&scene, &s, &no_progress).unwrap();
+        s.radiosity.cull_clusters = false;
+        let off = bake_lightmaps(&scene, &s, &no_progress).unwrap();
+        let (a, b) = (on.stats.radiosity.unwrap(), off.stats.radiosity.unwrap());
+        println!(
+            "{name}: {} patches, {} shots, transfers {} culled / {} not ({:.3}), {:.2} s / {:.2} s",
+            a.patches,
+            a.shots,
+            a.transfers,
+            b.transfers,
+            a.transfers as f64 / b.transfers as f64,
+            on.stats.seconds_total,
+            off.stats.seconds_total
+        );
+        assert_eq!(a.shots, b.shots, "{name}");
+        assert!(a.shots > 10, "{name}: {} shots", a.shots);
+        for (p, q) in on.pages.iter().zip(&off.pages) {
+            assert!(p.data == q.data, "{name}: culling changed the light-map");
+        }
+        assert!(
+            (a.transfers as f64) < most * b.transfers as f64,
+            "{name}: {} of {} transfers",
+            a.transfers,
+            b.transfers
+        );
+    }
+}
