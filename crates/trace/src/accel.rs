@@ -105,13 +105,17 @@ fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
 }
 
 /// The BVH build: obvhs's slow preset (PLOC with pre-splits and re-insertion; a build is a
-/// small part of any render) with its SAH leaf collapse at up to eight triangles (two SIMD
-/// blocks). Measured with `lightlab bench trace` (incoherent rays, 1 thread, Mrays/s):
-/// leaves of up to 8 against up to 4, bush 3.81 / 3.64, prt 3.76 / 3.70; obvhs's medium preset
-/// −5 to −10 %, very-slow within noise at twice the build time; no pre-splits −5 % on bush.
+/// small part of any render) with its SAH leaf collapse at up to sixteen triangles (two SIMD
+/// blocks of eight) and a traversal cost of 4. Measured with `lightlab bench trace` (incoherent
+/// rays, 1 thread, Mrays/s, median of five runs alternated): prt 3.68 against 3.39 for up to 8
+/// triangles at cost 3 (3.44 at 16/3, 3.38 at 8/5); bush and cornell within noise. Earlier,
+/// with four-triangle blocks: leaves of up to 8 against up to 4, bush 3.81 / 3.64; obvhs's
+/// medium preset −5 to −10 %, very-slow within noise at twice the build time; no pre-splits
+/// −5 % on bush.
 fn build_params() -> BvhBuildParams {
     BvhBuildParams {
-        max_prims_per_leaf: 8,
+        max_prims_per_leaf: 16,
+        collapse_traversal_cost: 4.0,
         ..BvhBuildParams::slow_build()
     }
 }
