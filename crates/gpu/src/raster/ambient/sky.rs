@@ -1,6 +1,7 @@
 //! Occluded sky light for the Phong techniques (issue 22): the environment's diffuse light is
-//! split into cells around K directions (a spherical Fibonacci set; each environment texel goes
-//! to its nearest direction), each cell's irradiance kept as nine SH coefficients, and each
+//! split into cells around K directions (a spherical Fibonacci set moved towards the sky's light
+//! by Lloyd's relaxation, [`importance_directions`]; each environment texel goes to its nearest
+//! direction), each cell's irradiance kept as nine SH coefficients, and each
 //! direction gets an orthographic depth map of the scene seen from it. A surface point's sky
 //! light is then Σ_k V_k(p)·E_k(n), V_k read from map k with a small PCF kernel, applied as the
 //! ratio Σ V_k E_k / Σ E_k to the unshadowed term (SH or irradiance map), so that an open sky
@@ -24,6 +25,13 @@ use wgpu::util::DeviceExt;
 
 /// Directions by default (`--sky-occlusion`).
 pub const DEFAULT_DIRECTIONS: u32 = 64;
+/// Lloyd steps that move the directions towards the sky's light, and the share of the mean
+/// luminance every texel counts with besides its own ([`importance_directions`]). Measured on
+/// the sky's error against `direct` (320 × 240, `--ssaa 2`): room 0.0044 → 0.0042, atrium 0.0142
+/// → 0.0138, bush 0.0109 → 0.0107 against uniform directions; a floor of 0.02 or 0.5 within 2 %
+/// of 0.1.
+const LLOYD_STEPS: usize = 8;
+const DARK_FLOOR: f64 = 0.1;
 /// Side of each direction's depth map.
 const MAP_SIZE: u32 = 256;
 
@@ -64,6 +72,50 @@ pub fn fibonacci_directions(n: u32) -> Vec<Vec3> {
             Vec3::new(r * phi.cos(), y, r * phi.sin())
         })
         .collect()
+}
+
+/// `n` directions placed by the light of `env` (lat-long, × `scale`): spherical Fibonacci
+/// points moved by `iterations` steps of Lloyd's relaxation on the sphere, each texel weighted
+/// by its luminance·ΔΩ plus `floor` × the mean luminance·ΔΩ (so that dark parts of the sphere
+/// keep some directions). Weighted Lloyd places points with a density ∝ √weight: bright parts
+/// of the sky get smaller cells.
+pub fn importance_directions(
+    env: &Image,
+    scale: f32,
+    n: u32,
+    iterations: usize,
+    floor: f64,
+) -> Vec<Vec3> {
+    let mut dirs = fibonacci_directions(n);
+    let mut texels = vec![];
+    for_each_texel(env, EnvFormat::LatLong, |d, omega, v| {
+        texels.push((
+            d.as_vec3(),
+            omega * v.dot(LUMINANCE).max(0.0) as f64 * scale as f64,
+            omega,
+        ));
+    });
+    let total_w: f64 = texels.iter().map(|t| t.1).sum();
+    let total_o: f64 = texels.iter().map(|t| t.2).sum();
+    if dirs.is_empty() || texels.is_empty() || total_w <= 0.0 {
+        return dirs;
+    }
+    let mean = total_w / total_o;
+    for _ in 0..iterations {
+        let mut sum = vec![glam::DVec3::ZERO; dirs.len()];
+        for &(d, w, omega) in &texels {
+            let k = (0..dirs.len())
+                .max_by(|&a, &b| dirs[a].dot(d).total_cmp(&dirs[b].dot(d)))
+                .unwrap_or(0);
+            sum[k] += d.as_dvec3() * (w + floor * mean * omega);
+        }
+        for (d, s) in dirs.iter_mut().zip(&sum) {
+            if let Some(m) = s.as_vec3().try_normalize() {
+                *d = m;
+            }
+        }
+    }
+    dirs
 }
 
 /// Each direction's cell of `env` (lat-long, × `scale`; each texel goes to its nearest
@@ -132,7 +184,10 @@ impl SkyOcclusion {
         };
         let centre = (lo + hi) * 0.5;
         let radius = ((hi - lo).length() * 0.5).max(1e-3) * 1.01;
-        let dirs = fibonacci_directions(directions);
+        let dirs = match env {
+            Some((img, s)) => importance_directions(img, s, directions, LLOYD_STEPS, DARK_FLOOR),
+            None => vec![],
+        };
         let cells = env.map_or(vec![], |(img, s)| sky_cells(img, s, &dirs));
         let data: Vec<SkyDir> = dirs
             .iter()
@@ -399,5 +454,36 @@ mod tests {
         assert!(!lights.is_empty() && lights.len() < 16);
         assert!(lights.iter().all(|(d, _)| d.y > 0.0));
         assert!(sky_lights(&flat, 1.0, 0).is_empty());
+    }
+
+    /// Lloyd's relaxation by the sky's light: unit directions, more of them where the sky is
+    /// bright (a sky 30× brighter above the horizon gets √30 ≈ 5.5 times the density there,
+    /// about 44 of 64 above, against 32 uniformly), and a uniform sky's irradiance still
+    /// within 3 % of πL for any normal; no directions for none asked, uniform ones for a black
+    /// sky.
+    #[test]
+    fn directions_follow_the_sky_light() {
+        let sky = Image::from_fn(128, 64, |_, y| Vec3::splat(if y < 32 { 30.0 } else { 1.0 }));
+        let dirs = importance_directions(&sky, 1.0, 64, LLOYD_STEPS, DARK_FLOOR);
+        assert_eq!(dirs.len(), 64);
+        assert!(dirs.iter().all(|d| (d.length() - 1.0).abs() < 1e-4));
+        let above = dirs.iter().filter(|d| d.y > 0.0).count();
+        assert!(
+            (40..=56).contains(&above),
+            "{above} of 64 above the horizon"
+        );
+        let flat = Image::from_fn(128, 64, |_, _| Vec3::ONE);
+        let cells = sky_cells(&flat, 1.0, &importance_directions(&flat, 1.0, 64, 8, 0.1));
+        for n in fibonacci_directions(40) {
+            let e: f32 = cells.iter().map(|(d, e)| e.x * n.dot(*d).max(0.0)).sum();
+            let pi = std::f32::consts::PI;
+            assert!((e - pi).abs() < 0.03 * pi, "{n}: {e}");
+        }
+        assert!(importance_directions(&flat, 1.0, 0, 8, 0.1).is_empty());
+        let black = Image::from_fn(16, 8, |_, _| Vec3::ZERO);
+        assert_eq!(
+            importance_directions(&black, 1.0, 16, 8, 0.1),
+            fibonacci_directions(16)
+        );
     }
 }
