@@ -21,6 +21,10 @@
 //!    [`crate::radiosity`]). T_j += ΔT_j, U_j += ρ_j ΔT_j; the block's unshot transfer becomes 0.
 //! 3. Stop when no block holds more than `stop` × the largest initial unshot power.
 //!
+//! Each block holds its members' total and unshot transfer while the solver runs, so that a
+//! shot updates every receiving block in place, in parallel (one rayon task per block), with
+//! no per-patch vectors collected and applied serially; the result is the same bit for bit.
+//!
 //! Deviations: the form factor (Wallace instead of CaLight's clamped point-to-point one, see
 //! `radiosity`'s module doc for why), the relative stop threshold (CaSHL's StopUT 0.1 is in its
 //! own units), per-texel albedo, and no tone mapping of the transfer (CaSHL tone-maps it
@@ -83,12 +87,45 @@ pub struct ShootPatch {
     pub instance: u32,
 }
 
+/// An n×n block of patches of one instance and page with similar normals: a shooter, and a
+/// unit of the parallel update. It holds its members' transfer while the solver runs (so that
+/// a shot updates every block in place, in parallel, without collecting per-patch vectors).
 struct Block {
     members: Vec<u32>,
     centre: Vec3,
     n: Vec3,
     ng: Vec3,
     area: f32,
+    /// The members' total and unshot transfer (member-major, `nc` each).
+    total: Vec<f32>,
+    unshot: Vec<f32>,
+    /// An upper bound of the unshot power Σ |U|₁·A (exact after [`Block::power`]).
+    power: f64,
+}
+
+impl Block {
+    /// The exact unshot power Σ |U|₁·A.
+    fn power(&self, patches: &[ShootPatch], nc: usize) -> f64 {
+        self.members
+            .iter()
+            .zip(self.unshot.chunks_exact(nc))
+            .map(|(&k, u)| {
+                u.iter().map(|v| v.abs() as f64).sum::<f64>() * patches[k as usize].area as f64
+            })
+            .sum()
+    }
+}
+
+/// What one shot sends: the shooting block as one source (centre, mean shading normal,
+/// geometric normal, area, unshot power per coefficient) and, for the near field, its members
+/// with their own unshot transfer.
+struct Shot {
+    c: Vec3,
+    n: Vec3,
+    ng: Vec3,
+    area: f32,
+    phi: Vec<f32>,
+    members: Vec<(ShootPatch, Vec<f32>)>,
 }
 
 /// Receivers closer than this many block sizes are shot from the block's patches one by one.
@@ -127,73 +164,21 @@ pub fn shoot(
         patches: np,
         ..Default::default()
     };
-    let mut unshot: Vec<f32> = transfer
-        .chunks_exact(nc)
-        .zip(patches)
-        .flat_map(|(t, p)| t.iter().map(move |v| v * p.rho))
-        .collect();
-    // Blocks of n×n patches of one instance and page with similar normals.
-    let n = s.block_size;
-    let mut block_of = vec![0u32; np];
-    let mut blocks: Vec<Block> = vec![];
-    {
-        let mut map: std::collections::HashMap<(u32, u32, u32, u32), Vec<usize>> =
-            Default::default();
-        for (k, p) in patches.iter().enumerate() {
-            let key = (p.page, p.x / n, p.y / n, p.instance);
-            let list = map.entry(key).or_default();
-            let found = list.iter().copied().find(|&b| blocks[b].ng.dot(p.ng) > 0.9);
-            let b = match found {
-                Some(b) => b,
-                None => {
-                    blocks.push(Block {
-                        members: vec![],
-                        centre: Vec3::ZERO,
-                        n: Vec3::ZERO,
-                        ng: p.ng,
-                        area: 0.0,
-                    });
-                    list.push(blocks.len() - 1);
-                    blocks.len() - 1
-                }
-            };
-            block_of[k] = b as u32;
-            let bl = &mut blocks[b];
-            bl.members.push(k as u32);
-            bl.centre += p.p;
-            bl.n += p.n;
-            bl.area += p.area;
-        }
-    }
+    let mut blocks = make_blocks(patches, transfer, nc, s.block_size);
     for b in &mut blocks {
-        b.centre /= b.members.len() as f32;
-        b.n = b.n.normalize_or(b.ng);
+        b.power = b.power(patches, nc);
     }
-    let power = |b: &Block, unshot: &[f32]| -> f64 {
-        b.members
-            .iter()
-            .map(|&k| {
-                let k = k as usize;
-                unshot[k * nc..(k + 1) * nc]
-                    .iter()
-                    .map(|v| v.abs() as f64)
-                    .sum::<f64>()
-                    * patches[k].area as f64
-            })
-            .sum()
-    };
-    let mut block_power: Vec<f64> = blocks.iter().map(|b| power(b, &unshot)).collect();
-    let initial_total: f64 = block_power.iter().sum();
-    let initial_max = block_power.iter().copied().fold(0.0, f64::max);
+    let initial_total: f64 = blocks.iter().map(|b| b.power).sum();
+    let initial_max = blocks.iter().map(|b| b.power).fold(0.0, f64::max);
     if initial_max <= 0.0 {
         return Ok(stats);
     }
     let threshold = s.stop as f64 * initial_max;
     loop {
         let (bi, bp) =
-            block_power
+            blocks
                 .iter()
-                .copied()
+                .map(|b| b.power)
                 .enumerate()
                 .fold(
                     (usize::MAX, 0.0),
@@ -202,11 +187,11 @@ pub fn shoot(
         if bi == usize::MAX || bp < threshold {
             break;
         }
-        // `block_power` is an upper bound (|·|₁ of a sum ≤ the sum of |·|₁): recount the chosen
+        // `power` is an upper bound (|·|₁ of a sum ≤ the sum of |·|₁): recount the chosen
         // block, and choose again when the bound was loose.
-        let real = power(&blocks[bi], &unshot);
+        let real = blocks[bi].power(patches, nc);
         if real < 0.999 * bp {
-            block_power[bi] = real;
+            blocks[bi].power = real;
             continue;
         }
         if stats.shots >= s.max_shots {
@@ -217,89 +202,165 @@ pub fn shoot(
             return Err(crate::BakeError::Cancelled);
         }
         stats.shots += 1;
-        let b = &blocks[bi];
-        // The block's unshot power (per coefficient) and its members' own, for the near field.
-        let mut phi = vec![0.0f32; nc];
-        let members: Vec<(ShootPatch, Vec<f32>)> = b
-            .members
-            .iter()
-            .map(|&k| {
-                let k = k as usize;
-                let u: Vec<f32> = unshot[k * nc..(k + 1) * nc].to_vec();
-                for (a, v) in phi.iter_mut().zip(&u) {
-                    *a += v * patches[k].area;
-                }
-                unshot[k * nc..(k + 1) * nc].fill(0.0);
-                (patches[k], u)
-            })
-            .collect();
-        block_power[bi] = 0.0;
-        let near2 = NEAR * NEAR * b.area;
-        let from = |q: &ShootPatch, c: Vec3, nrm: Vec3, ng: Vec3, area: f32| -> Option<f32> {
-            let r = q.p - c;
-            let d2 = r.length_squared();
-            if d2 <= 0.0 {
-                return None;
-            }
-            let d = r / d2.sqrt();
-            let (ci, cj) = (nrm.dot(d), -q.n.dot(d));
-            if ci <= 0.0 || cj <= 0.0 || ng.dot(d) <= 0.0 || -q.ng.dot(d) <= 0.0 {
-                return None;
-            }
-            let o = c + ng * ray_eps(c);
-            let t = q.p + q.ng * ray_eps(q.p);
-            if accel.occluded(o, t - o, 1.0 - 1e-4) {
-                return None;
-            }
-            Some(area * ci * cj / (std::f32::consts::PI * d2 + area))
-        };
-        let (c, bn, bng, ba) = (b.centre, b.n, b.ng, b.area);
-        let single = members.len() == 1;
-        let received: Vec<(usize, Vec<f32>)> = (0..np)
-            .into_par_iter()
-            .filter(|&j| block_of[j] as usize != bi)
-            .filter_map(|j| {
-                let q = &patches[j];
-                let mut dt = vec![0.0f32; nc];
-                if single || (q.p - c).length_squared() >= near2 {
-                    let f = from(q, c, bn, bng, ba)?;
-                    let w = f / ba;
-                    for (a, v) in dt.iter_mut().zip(&phi) {
-                        *a = v * w;
-                    }
-                } else {
-                    let mut any = false;
-                    for (m, u) in &members {
-                        if let Some(f) = from(q, m.p, m.n, m.ng, m.area) {
-                            any = true;
-                            for (a, v) in dt.iter_mut().zip(u) {
-                                *a += v * f;
-                            }
-                        }
-                    }
-                    if !any {
-                        return None;
-                    }
-                }
-                Some((j, dt))
-            })
-            .collect();
-        for (j, dt) in received {
-            let rho = patches[j].rho;
-            let mut added = 0.0f64;
-            for (c, v) in dt.iter().enumerate() {
-                transfer[j * nc + c] += v;
-                unshot[j * nc + c] += rho * v;
-                added += (rho * v).abs() as f64;
-            }
-            block_power[block_of[j] as usize] += added * patches[j].area as f64;
-        }
+        let shot = take_shot(&mut blocks[bi], patches, nc);
+        blocks
+            .par_iter_mut()
+            .enumerate()
+            .filter(|(i, _)| *i != bi)
+            .for_each(|(_, b)| receive(accel, &shot, b, patches, nc));
     }
-    let left: f64 = blocks.iter().map(|b| power(b, &unshot)).sum();
+    let left: f64 = blocks.iter().map(|b| b.power(patches, nc)).sum();
     stats.unshot_fraction = if initial_total > 0.0 {
         left / initial_total
     } else {
         0.0
     };
+    for b in &blocks {
+        for (&k, t) in b.members.iter().zip(b.total.chunks_exact(nc)) {
+            let k = k as usize;
+            transfer[k * nc..(k + 1) * nc].copy_from_slice(t);
+        }
+    }
     Ok(stats)
+}
+
+/// Group the patches into blocks of n×n patches of one instance and page with similar normals
+/// (members in patch order), each holding its members' transfer: total = `transfer`,
+/// unshot = ρ·`transfer`.
+fn make_blocks(patches: &[ShootPatch], transfer: &[f32], nc: usize, n: u32) -> Vec<Block> {
+    let mut blocks: Vec<Block> = vec![];
+    let mut map: std::collections::HashMap<(u32, u32, u32, u32), Vec<usize>> = Default::default();
+    for (k, p) in patches.iter().enumerate() {
+        let key = (p.page, p.x / n, p.y / n, p.instance);
+        let list = map.entry(key).or_default();
+        let found = list.iter().copied().find(|&b| blocks[b].ng.dot(p.ng) > 0.9);
+        let b = found.unwrap_or_else(|| {
+            blocks.push(Block {
+                members: vec![],
+                centre: Vec3::ZERO,
+                n: Vec3::ZERO,
+                ng: p.ng,
+                area: 0.0,
+                total: vec![],
+                unshot: vec![],
+                power: 0.0,
+            });
+            list.push(blocks.len() - 1);
+            blocks.len() - 1
+        });
+        let bl = &mut blocks[b];
+        let t = &transfer[k * nc..(k + 1) * nc];
+        bl.members.push(k as u32);
+        bl.total.extend_from_slice(t);
+        bl.unshot.extend(t.iter().map(|v| v * p.rho));
+        bl.centre += p.p;
+        bl.n += p.n;
+        bl.area += p.area;
+    }
+    for b in &mut blocks {
+        b.centre /= b.members.len() as f32;
+        b.n = b.n.normalize_or(b.ng);
+    }
+    blocks
+}
+
+/// Empty block `b`'s unshot transfer into a shot.
+fn take_shot(b: &mut Block, patches: &[ShootPatch], nc: usize) -> Shot {
+    let mut phi = vec![0.0f32; nc];
+    let members = b
+        .members
+        .iter()
+        .zip(b.unshot.chunks_exact(nc))
+        .map(|(&k, u)| {
+            let q = patches[k as usize];
+            for (a, v) in phi.iter_mut().zip(u) {
+                *a += v * q.area;
+            }
+            (q, u.to_vec())
+        })
+        .collect();
+    b.unshot.fill(0.0);
+    b.power = 0.0;
+    Shot {
+        c: b.centre,
+        n: b.n,
+        ng: b.ng,
+        area: b.area,
+        phi,
+        members,
+    }
+}
+
+/// The form factor F from a source (centre `c`, normals, area) to patch `q`, if it faces the
+/// source and sees it (Wallace's disc form factor times the area: A cosθ_I cosθ_j/(πr² + A)).
+fn form_factor(
+    accel: &Accel,
+    q: &ShootPatch,
+    c: Vec3,
+    nrm: Vec3,
+    ng: Vec3,
+    area: f32,
+) -> Option<f32> {
+    let r = q.p - c;
+    let d2 = r.length_squared();
+    if d2 <= 0.0 {
+        return None;
+    }
+    let d = r / d2.sqrt();
+    let (ci, cj) = (nrm.dot(d), -q.n.dot(d));
+    if ci <= 0.0 || cj <= 0.0 || ng.dot(d) <= 0.0 || -q.ng.dot(d) <= 0.0 {
+        return None;
+    }
+    let o = c + ng * ray_eps(c);
+    let t = q.p + q.ng * ray_eps(q.p);
+    if accel.occluded(o, t - o, 1.0 - 1e-4) {
+        return None;
+    }
+    Some(area * ci * cj / (std::f32::consts::PI * d2 + area))
+}
+
+/// Receive `shot` into every member of block `b`: ΔT = (Φ/A_I)·F from the block as one source,
+/// or Σ U_m·F_m from its members one by one within the near field; T += ΔT, U += ρΔT, and the
+/// block's power bound grows by |ρΔT|₁·A.
+fn receive(accel: &Accel, shot: &Shot, b: &mut Block, patches: &[ShootPatch], nc: usize) {
+    let near2 = NEAR * NEAR * shot.area;
+    let single = shot.members.len() == 1;
+    let mut dt = vec![0.0f32; nc];
+    for (i, &k) in b.members.iter().enumerate() {
+        let q = &patches[k as usize];
+        if single || (q.p - shot.c).length_squared() >= near2 {
+            let Some(f) = form_factor(accel, q, shot.c, shot.n, shot.ng, shot.area) else {
+                continue;
+            };
+            let w = f / shot.area;
+            for (a, v) in dt.iter_mut().zip(&shot.phi) {
+                *a = v * w;
+            }
+        } else {
+            dt.fill(0.0);
+            let mut any = false;
+            for (m, u) in &shot.members {
+                if let Some(f) = form_factor(accel, q, m.p, m.n, m.ng, m.area) {
+                    any = true;
+                    for (a, v) in dt.iter_mut().zip(u) {
+                        *a += v * f;
+                    }
+                }
+            }
+            if !any {
+                continue;
+            }
+        }
+        let mut added = 0.0f64;
+        let (t, u) = (
+            &mut b.total[i * nc..(i + 1) * nc],
+            &mut b.unshot[i * nc..(i + 1) * nc],
+        );
+        for ((t, u), v) in t.iter_mut().zip(u.iter_mut()).zip(&dt) {
+            *t += v;
+            *u += q.rho * v;
+            added += (q.rho * v).abs() as f64;
+        }
+        b.power += added * q.area as f64;
+    }
 }
