@@ -251,7 +251,61 @@ pub fn unwrap_scene(scene: &mut Scene, settings: &LayoutSettings) -> Result<Layo
     }
     let mut instances = vec![None; scene.instances.len()];
     let mut pages: Vec<[u32; 2]> = vec![];
-    // Meshes to unwrap: instanced, with triangles, without usable authored UVs.
+    let (todo, regenerated) = meshes_to_unwrap(scene, settings, &per_mesh);
+    // Refuse a request that cannot fit before the unwrap allocates its raster.
+    let area = surface_area(scene);
+    let need = area * (settings.texels_per_metre as f64).powi(2);
+    let page = settings.max_page_size as f64;
+    if need > page * page {
+        return Err(BakeError::Settings(format!(
+            "the scene's {area:.1} m² need {need:.0} texels at {} per metre, more than one \
+             {}² page holds; lower the texel density",
+            settings.texels_per_metre, settings.max_page_size
+        )));
+    }
+    let (charts, mut covered) = if todo.is_empty() {
+        (0, 0.0)
+    } else {
+        unwrap_meshes(
+            scene,
+            settings,
+            &todo,
+            &per_mesh,
+            &mut instances,
+            &mut pages,
+        )?
+    };
+    covered += authored_pages(
+        scene,
+        settings,
+        &todo,
+        &per_mesh,
+        &mut instances,
+        &mut pages,
+    )?;
+    let total: f64 = pages.iter().map(|p| p[0] as f64 * p[1] as f64).sum();
+    Ok(Layout {
+        settings: *settings,
+        pages,
+        instances,
+        charts,
+        utilization: if total > 0.0 {
+            (covered / total) as f32
+        } else {
+            0.0
+        },
+        regenerated,
+    })
+}
+
+/// The meshes to unwrap (instanced, with triangles, without usable authored UVs; by
+/// `settings.lightmap_uv`) and a line for each mesh whose authored UVs were set aside or kept
+/// though unusable.
+fn meshes_to_unwrap(
+    scene: &Scene,
+    settings: &LayoutSettings,
+    per_mesh: &[Vec<usize>],
+) -> (Vec<usize>, Vec<String>) {
     let mut regenerated = vec![];
     let todo: Vec<usize> = (0..scene.meshes.len())
         .filter(|&m| {
@@ -284,85 +338,96 @@ pub fn unwrap_scene(scene: &mut Scene, settings: &LayoutSettings) -> Result<Layo
             }
         })
         .collect();
-    // Refuse a request that cannot fit before the unwrap allocates its raster.
-    let area = surface_area(scene);
-    let need = area * (settings.texels_per_metre as f64).powi(2);
-    let page = settings.max_page_size as f64;
-    if need > page * page {
+    (todo, regenerated)
+}
+
+/// Unwrap the meshes `todo` into one atlas: their rects go into `instances`, the atlas's pages
+/// onto `pages`. Returns the charts made and the texels covered.
+fn unwrap_meshes(
+    scene: &mut Scene,
+    settings: &LayoutSettings,
+    todo: &[usize],
+    per_mesh: &[Vec<usize>],
+    instances: &mut [Option<InstanceRect>],
+    pages: &mut Vec<[u32; 2]>,
+) -> Result<(u32, f64), BakeError> {
+    let positions: Vec<Vec<[f32; 3]>> = todo
+        .iter()
+        .map(|&m| {
+            scene.meshes[m]
+                .positions
+                .iter()
+                .map(|p| p.to_array())
+                .collect()
+        })
+        .collect();
+    let scales: Vec<Vec<f32>> = todo
+        .iter()
+        .map(|&m| {
+            per_mesh[m]
+                .iter()
+                .map(|&i| instance_scale(&scene.instances[i].transform))
+                .collect()
+        })
+        .collect();
+    let inputs: Vec<uvunwrap::MeshInput> = todo
+        .iter()
+        .enumerate()
+        .map(|(k, &m)| uvunwrap::MeshInput {
+            instance_scales: &scales[k],
+            ..uvunwrap::MeshInput::new(&positions[k], &scene.meshes[m].indices)
+        })
+        .collect();
+    let options = uvunwrap::Options {
+        density: uvunwrap::Density::Fixed {
+            texels_per_unit: settings.texels_per_metre,
+            page_size: None,
+        },
+        padding: settings.padding,
+        max_chart_size: settings.max_page_size - 2 * settings.padding,
+        ..Default::default()
+    };
+    let atlas =
+        uvunwrap::generate(&inputs, &options).map_err(|e| BakeError::Unwrap(e.to_string()))?;
+    if atlas.width > settings.max_page_size || atlas.height > settings.max_page_size {
         return Err(BakeError::Settings(format!(
-            "the scene's {area:.1} m² need {need:.0} texels at {} per metre, more than one \
-             {}² page holds; lower the texel density",
-            settings.texels_per_metre, settings.max_page_size
+            "the light-map page would be {}×{} texels, more than the largest page {}; \
+             lower the texel density (now {} per metre)",
+            atlas.width, atlas.height, settings.max_page_size, settings.texels_per_metre
         )));
     }
-    let mut charts = 0;
-    let mut covered = 0.0f64;
-    if !todo.is_empty() {
-        let positions: Vec<Vec<[f32; 3]>> = todo
-            .iter()
-            .map(|&m| {
-                scene.meshes[m]
-                    .positions
-                    .iter()
-                    .map(|p| p.to_array())
-                    .collect()
-            })
-            .collect();
-        let scales: Vec<Vec<f32>> = todo
-            .iter()
-            .map(|&m| {
-                per_mesh[m]
-                    .iter()
-                    .map(|&i| instance_scale(&scene.instances[i].transform))
-                    .collect()
-            })
-            .collect();
-        let inputs: Vec<uvunwrap::MeshInput> = todo
-            .iter()
-            .enumerate()
-            .map(|(k, &m)| uvunwrap::MeshInput {
-                instance_scales: &scales[k],
-                ..uvunwrap::MeshInput::new(&positions[k], &scene.meshes[m].indices)
-            })
-            .collect();
-        let options = uvunwrap::Options {
-            density: uvunwrap::Density::Fixed {
-                texels_per_unit: settings.texels_per_metre,
-                page_size: None,
-            },
-            padding: settings.padding,
-            max_chart_size: settings.max_page_size - 2 * settings.padding,
-            ..Default::default()
-        };
-        let atlas =
-            uvunwrap::generate(&inputs, &options).map_err(|e| BakeError::Unwrap(e.to_string()))?;
-        if atlas.width > settings.max_page_size || atlas.height > settings.max_page_size {
-            return Err(BakeError::Settings(format!(
-                "the light-map page would be {}×{} texels, more than the largest page {}; \
-                 lower the texel density (now {} per metre)",
-                atlas.width, atlas.height, settings.max_page_size, settings.texels_per_metre
-            )));
-        }
-        for _ in 0..atlas.page_count {
-            pages.push([atlas.width, atlas.height]);
-        }
-        charts = atlas.chart_count;
-        covered += atlas.utilization as f64 * (atlas.width as f64 * atlas.height as f64);
-        for (k, &m) in todo.iter().enumerate() {
-            let out = &atlas.meshes[k];
-            let mesh = &mut scene.meshes[m];
-            remap_mesh(mesh, out);
-            for (j, &i) in per_mesh[m].iter().enumerate() {
-                let r = out.instances[j];
-                instances[i] = Some(InstanceRect {
-                    page: r.page,
-                    offset: r.min,
-                    scale: [r.max[0] - r.min[0], r.max[1] - r.min[1]],
-                });
-            }
+    for _ in 0..atlas.page_count {
+        pages.push([atlas.width, atlas.height]);
+    }
+    let charts = atlas.chart_count;
+    let covered = atlas.utilization as f64 * (atlas.width as f64 * atlas.height as f64);
+    for (k, &m) in todo.iter().enumerate() {
+        let out = &atlas.meshes[k];
+        let mesh = &mut scene.meshes[m];
+        remap_mesh(mesh, out);
+        for (j, &i) in per_mesh[m].iter().enumerate() {
+            let r = out.instances[j];
+            instances[i] = Some(InstanceRect {
+                page: r.page,
+                offset: r.min,
+                scale: [r.max[0] - r.min[0], r.max[1] - r.min[1]],
+            });
         }
     }
-    // Authored UVs: one page per instance.
+    Ok((charts, covered))
+}
+
+/// Authored light-map UVs (the meshes not in `todo`): one page per instance, sized for the
+/// texel density. Returns the texels covered.
+fn authored_pages(
+    scene: &Scene,
+    settings: &LayoutSettings,
+    todo: &[usize],
+    per_mesh: &[Vec<usize>],
+    instances: &mut [Option<InstanceRect>],
+    pages: &mut Vec<[u32; 2]>,
+) -> Result<f64, BakeError> {
+    let mut covered = 0.0f64;
     for (m, insts) in per_mesh.iter().enumerate() {
         if todo.contains(&m) {
             continue;
@@ -410,19 +475,7 @@ pub fn unwrap_scene(scene: &mut Scene, settings: &LayoutSettings) -> Result<Layo
             pages.push([side, side]);
         }
     }
-    let total: f64 = pages.iter().map(|p| p[0] as f64 * p[1] as f64).sum();
-    Ok(Layout {
-        settings: *settings,
-        pages,
-        instances,
-        charts,
-        utilization: if total > 0.0 {
-            (covered / total) as f32
-        } else {
-            0.0
-        },
-        regenerated,
-    })
+    Ok(covered)
 }
 
 /// Rebuild a mesh from the unwrap's output vertices (`xref` = source vertex).

@@ -1611,6 +1611,64 @@ pub fn export_with(scene: &Scene, path: &Path, extras: &ExportExtras) -> Result<
     Ok(())
 }
 
+/// Instance `i`'s node: its mesh, transform, the caller's extras and its luminaire.
+fn instance_node(scene: &Scene, i: usize, inst: &Instance, extras: &ExportExtras) -> Value {
+    let mut node =
+        json!({ "name": inst.name, "mesh": inst.mesh, "matrix": inst.transform.to_cols_array() });
+    if let Some(Some(e)) = extras.instance_extras.get(i) {
+        node["extras"] = e.clone();
+    }
+    if let Some(l) = &inst.luminaire {
+        if !node["extras"].is_object() {
+            node["extras"] = json!({});
+        }
+        if !node["extras"]["lightlab"].is_object() {
+            node["extras"]["lightlab"] = json!({});
+        }
+        node["extras"]["lightlab"]["luminaire"] = json!(l);
+        if let Some(f) = scene.luminaire_focus.get(l) {
+            node["extras"]["lightlab"]["luminaireFocus"] = json!(f);
+        }
+    }
+    node
+}
+
+/// A punctual light as `KHR_lights_punctual` describes it, and its node (the node's local frame
+/// is the light's). `stem`: the exported file's stem, which names goniometric profiles.
+fn light_json(l: &Light, i: usize, stem: &str) -> (Value, Value) {
+    let mut v = json!({ "name": l.name, "color": l.color.to_array(), "intensity": l.intensity });
+    match &l.kind {
+        LightKind::Point => v["type"] = json!("point"),
+        LightKind::Spot {
+            inner_cone,
+            outer_cone,
+        } => {
+            v["type"] = json!("spot");
+            v["spot"] = json!({ "innerConeAngle": inner_cone, "outerConeAngle": outer_cone });
+        }
+        LightKind::Directional { angular_diameter } => {
+            v["type"] = json!("directional");
+            v["extras"] = json!({ "angularDiameter": angular_diameter });
+        }
+        LightKind::Goniometric { .. } => {
+            v["type"] = json!("point");
+            v["extras"] = json!({ "lightlab": { "ies": profile_uri(stem, i) } });
+        }
+    }
+    if let Some(r) = l.range {
+        v["range"] = json!(r);
+    }
+    // The node's local frame is the light's (−Z its direction; +X a goniometric
+    // light's C0 plane).
+    let rot = Quat::from_mat3(&l.local_frame().transpose());
+    let m = Mat4::from_rotation_translation(rot, l.position);
+    let node = json!({
+        "name": l.name, "matrix": m.to_cols_array(),
+        "extensions": { "KHR_lights_punctual": { "light": i } }
+    });
+    (v, node)
+}
+
 /// The file name of `path` without its extension ("scene" when it has none).
 fn stem_of(path: &Path) -> String {
     path.file_stem()
@@ -1677,20 +1735,14 @@ impl Writer {
         self.accessors.len() - 1
     }
 
-    fn document(
+    /// The scene's textures and the caller's images (light-maps) as PNG images in the binary
+    /// blob, in that order.
+    fn images(
         &mut self,
         scene: &Scene,
-        env_uri: Option<&str>,
         path: &Path,
         extras: &ExportExtras,
-    ) -> Result<Value, SceneError> {
-        let mut used: Vec<&str> = vec![];
-        let use_ext = |e: &'static str, used: &mut Vec<&str>| {
-            if !used.contains(&e) {
-                used.push(e);
-            }
-        };
-        // Textures as PNG images in the binary blob.
+    ) -> Result<Vec<Value>, SceneError> {
         let mut images = vec![];
         for t in &scene.textures {
             let png = texture_png(t).map_err(|e| SceneError::Content {
@@ -1705,6 +1757,75 @@ impl Writer {
             let view = self.view(png, None);
             images.push(json!({ "name": name, "bufferView": view, "mimeType": "image/png" }));
         }
+        Ok(images)
+    }
+
+    /// One mesh with its attributes and indices written to the blob.
+    fn mesh_json(&mut self, m: &Mesh) -> Value {
+        let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
+        let mut attrs = serde_json::Map::new();
+        attrs.insert(
+            "POSITION".into(),
+            json!(self.floats(&flat(&m.positions), 3, "VEC3", true)),
+        );
+        if !m.normals.is_empty() {
+            attrs.insert(
+                "NORMAL".into(),
+                json!(self.floats(&flat(&m.normals), 3, "VEC3", false)),
+            );
+        }
+        if !m.tangents.is_empty() {
+            let t: Vec<f32> = m.tangents.iter().flat_map(|t| t.to_array()).collect();
+            attrs.insert("TANGENT".into(), json!(self.floats(&t, 4, "VEC4", false)));
+        }
+        let uvs = |v: &[Vec2]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
+        if !m.uv0.is_empty() {
+            attrs.insert(
+                "TEXCOORD_0".into(),
+                json!(self.floats(&uvs(&m.uv0), 2, "VEC2", false)),
+            );
+        }
+        if let Some(uv1) = &m.uv1 {
+            attrs.insert(
+                "TEXCOORD_1".into(),
+                json!(self.floats(&uvs(uv1), 2, "VEC2", false)),
+            );
+        }
+        if !m.colors.is_empty() {
+            let c: Vec<f32> = m.colors.iter().flat_map(|c| c.to_array()).collect();
+            attrs.insert("COLOR_0".into(), json!(self.floats(&c, 4, "VEC4", false)));
+        }
+        let idx: Vec<u8> = m.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        let view = self.view(&idx, Some(34963));
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": 5125, "count": m.indices.len(), "type": "SCALAR"
+        }));
+        let indices = self.accessors.len() - 1;
+        let mut mesh = json!({
+            "name": m.name,
+            "primitives": [{ "attributes": attrs, "indices": indices, "material": m.material, "mode": 4 }]
+        });
+        if let Some(d) = m.detail_source {
+            // glTF mesh i is scene mesh i.
+            mesh["extras"] = json!({ "lightlab": { "detailSource": d } });
+        }
+        mesh
+    }
+
+    fn document(
+        &mut self,
+        scene: &Scene,
+        env_uri: Option<&str>,
+        path: &Path,
+        extras: &ExportExtras,
+    ) -> Result<Value, SceneError> {
+        let mut used: Vec<&str> = vec![];
+        let use_ext = |e: &'static str, used: &mut Vec<&str>| {
+            if !used.contains(&e) {
+                used.push(e);
+            }
+        };
+        let images = self.images(scene, path, extras)?;
         // Caller images (light-maps) get sampler 1: bilinear, no mip-maps, clamped.
         let textures: Vec<Value> = (0..images.len())
             .map(|i| json!({ "source": i, "sampler": usize::from(i >= scene.textures.len()) }))
@@ -1722,77 +1843,13 @@ impl Writer {
             .iter()
             .map(|m| material_json(m, &mut used))
             .collect();
-        let mut meshes = vec![];
-        for m in &scene.meshes {
-            let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
-            let mut attrs = serde_json::Map::new();
-            attrs.insert(
-                "POSITION".into(),
-                json!(self.floats(&flat(&m.positions), 3, "VEC3", true)),
-            );
-            if !m.normals.is_empty() {
-                attrs.insert(
-                    "NORMAL".into(),
-                    json!(self.floats(&flat(&m.normals), 3, "VEC3", false)),
-                );
-            }
-            if !m.tangents.is_empty() {
-                let t: Vec<f32> = m.tangents.iter().flat_map(|t| t.to_array()).collect();
-                attrs.insert("TANGENT".into(), json!(self.floats(&t, 4, "VEC4", false)));
-            }
-            let uvs = |v: &[Vec2]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
-            if !m.uv0.is_empty() {
-                attrs.insert(
-                    "TEXCOORD_0".into(),
-                    json!(self.floats(&uvs(&m.uv0), 2, "VEC2", false)),
-                );
-            }
-            if let Some(uv1) = &m.uv1 {
-                attrs.insert(
-                    "TEXCOORD_1".into(),
-                    json!(self.floats(&uvs(uv1), 2, "VEC2", false)),
-                );
-            }
-            if !m.colors.is_empty() {
-                let c: Vec<f32> = m.colors.iter().flat_map(|c| c.to_array()).collect();
-                attrs.insert("COLOR_0".into(), json!(self.floats(&c, 4, "VEC4", false)));
-            }
-            let idx: Vec<u8> = m.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
-            let view = self.view(&idx, Some(34963));
-            self.accessors.push(json!({
-                "bufferView": view, "componentType": 5125, "count": m.indices.len(), "type": "SCALAR"
-            }));
-            let indices = self.accessors.len() - 1;
-            let mut mesh = json!({
-                "name": m.name,
-                "primitives": [{ "attributes": attrs, "indices": indices, "material": m.material, "mode": 4 }]
-            });
-            if let Some(d) = m.detail_source {
-                // glTF mesh i is scene mesh i.
-                mesh["extras"] = json!({ "lightlab": { "detailSource": d } });
-            }
-            meshes.push(mesh);
-        }
-        let mut nodes = vec![];
-        for (i, inst) in scene.instances.iter().enumerate() {
-            let mut node = json!({ "name": inst.name, "mesh": inst.mesh, "matrix": inst.transform.to_cols_array() });
-            if let Some(Some(e)) = extras.instance_extras.get(i) {
-                node["extras"] = e.clone();
-            }
-            if let Some(l) = &inst.luminaire {
-                if !node["extras"].is_object() {
-                    node["extras"] = json!({});
-                }
-                if !node["extras"]["lightlab"].is_object() {
-                    node["extras"]["lightlab"] = json!({});
-                }
-                node["extras"]["lightlab"]["luminaire"] = json!(l);
-                if let Some(f) = scene.luminaire_focus.get(l) {
-                    node["extras"]["lightlab"]["luminaireFocus"] = json!(f);
-                }
-            }
-            nodes.push(node);
-        }
+        let meshes: Vec<Value> = scene.meshes.iter().map(|m| self.mesh_json(m)).collect();
+        let mut nodes: Vec<Value> = scene
+            .instances
+            .iter()
+            .enumerate()
+            .map(|(i, inst)| instance_node(scene, i, inst, extras))
+            .collect();
         let animations = crate::gltf_anim::export(scene, &mut nodes, &mut |d, c, k, m| {
             self.untargeted_floats(d, c, k, m)
         });
@@ -1805,39 +1862,9 @@ impl Writer {
         }
         let mut lights = vec![];
         for (i, l) in scene.lights.iter().enumerate() {
-            let mut v =
-                json!({ "name": l.name, "color": l.color.to_array(), "intensity": l.intensity });
-            match &l.kind {
-                LightKind::Point => v["type"] = json!("point"),
-                LightKind::Spot {
-                    inner_cone,
-                    outer_cone,
-                } => {
-                    v["type"] = json!("spot");
-                    v["spot"] =
-                        json!({ "innerConeAngle": inner_cone, "outerConeAngle": outer_cone });
-                }
-                LightKind::Directional { angular_diameter } => {
-                    v["type"] = json!("directional");
-                    v["extras"] = json!({ "angularDiameter": angular_diameter });
-                }
-                LightKind::Goniometric { .. } => {
-                    v["type"] = json!("point");
-                    v["extras"] = json!({ "lightlab": { "ies": profile_uri(&stem_of(path), i) } });
-                }
-            }
-            if let Some(r) = l.range {
-                v["range"] = json!(r);
-            }
-            lights.push(v);
-            // The node's local frame is the light's (−Z its direction; +X a goniometric
-            // light's C0 plane).
-            let rot = Quat::from_mat3(&l.local_frame().transpose());
-            let m = Mat4::from_rotation_translation(rot, l.position);
-            nodes.push(json!({
-                "name": l.name, "matrix": m.to_cols_array(),
-                "extensions": { "KHR_lights_punctual": { "light": i } }
-            }));
+            let (light, node) = light_json(l, i, &stem_of(path));
+            lights.push(light);
+            nodes.push(node);
         }
         if !lights.is_empty() {
             use_ext("KHR_lights_punctual", &mut used);
