@@ -1,8 +1,8 @@
 //! Occluded sky light for the Phong techniques (issue 22): the environment's diffuse light is
 //! split into cells around K directions (a spherical Fibonacci set moved towards the sky's light
 //! by Lloyd's relaxation, [`importance_directions`]; each environment texel goes to its nearest
-//! direction), each cell's irradiance kept as nine SH coefficients, and each
-//! direction gets an orthographic depth map of the scene seen from it. A surface point's sky
+//! direction), each cell kept as one small source (its E⊥ and mean direction, [`SkyDir`]), and
+//! each direction gets an orthographic depth map of the scene seen from it. A surface point's sky
 //! light is then Σ_k V_k(p)·E_k(n), V_k read from map k with a small PCF kernel, applied as the
 //! ratio Σ V_k E_k / Σ E_k to the unshadowed term (SH or irradiance map), so that an open sky
 //! is unchanged.
@@ -74,6 +74,13 @@ pub fn fibonacci_directions(n: u32) -> Vec<Vec3> {
         .collect()
 }
 
+/// The index of the direction of `dirs` nearest to `d` (0 when there are none).
+fn nearest(dirs: &[Vec3], d: Vec3) -> usize {
+    (0..dirs.len())
+        .max_by(|&a, &b| dirs[a].dot(d).total_cmp(&dirs[b].dot(d)))
+        .unwrap_or(0)
+}
+
 /// `n` directions placed by the light of `env` (lat-long, × `scale`): spherical Fibonacci
 /// points moved by `iterations` steps of Lloyd's relaxation on the sphere, each texel weighted
 /// by its luminance·ΔΩ plus `floor` × the mean luminance·ΔΩ (so that dark parts of the sphere
@@ -87,27 +94,26 @@ pub fn importance_directions(
     floor: f64,
 ) -> Vec<Vec3> {
     let mut dirs = fibonacci_directions(n);
+    // (direction, luminance·ΔΩ, ΔΩ), then (direction, weight).
     let mut texels = vec![];
     for_each_texel(env, EnvFormat::LatLong, |d, omega, v| {
-        texels.push((
-            d.as_vec3(),
-            omega * v.dot(LUMINANCE).max(0.0) as f64 * scale as f64,
-            omega,
-        ));
+        let w = omega * v.dot(LUMINANCE).max(0.0) as f64 * scale as f64;
+        texels.push((d.as_vec3(), w, omega));
     });
     let total_w: f64 = texels.iter().map(|t| t.1).sum();
     let total_o: f64 = texels.iter().map(|t| t.2).sum();
     if dirs.is_empty() || texels.is_empty() || total_w <= 0.0 {
         return dirs;
     }
-    let mean = total_w / total_o;
+    let dark = floor * total_w / total_o;
+    let texels: Vec<(Vec3, f64)> = texels
+        .into_iter()
+        .map(|(d, w, omega)| (d, w + dark * omega))
+        .collect();
     for _ in 0..iterations {
         let mut sum = vec![glam::DVec3::ZERO; dirs.len()];
-        for &(d, w, omega) in &texels {
-            let k = (0..dirs.len())
-                .max_by(|&a, &b| dirs[a].dot(d).total_cmp(&dirs[b].dot(d)))
-                .unwrap_or(0);
-            sum[k] += d.as_dvec3() * (w + floor * mean * omega);
+        for &(d, w) in &texels {
+            sum[nearest(&dirs, d)] += d.as_dvec3() * w;
         }
         for (d, s) in dirs.iter_mut().zip(&sum) {
             if let Some(m) = s.as_vec3().try_normalize() {
@@ -129,10 +135,7 @@ pub fn sky_cells(env: &Image, scale: f32, dirs: &[Vec3]) -> Vec<(Vec3, Vec3)> {
         return vec![];
     }
     for_each_texel(env, EnvFormat::LatLong, |d, omega, v| {
-        let df = d.as_vec3();
-        let k = (0..dirs.len())
-            .max_by(|&a, &b| dirs[a].dot(df).total_cmp(&dirs[b].dot(df)))
-            .unwrap_or(0);
+        let k = nearest(dirs, d.as_vec3());
         let e = v.as_dvec3() * (omega * scale as f64);
         flux[k] += e;
         mean[k] += d * (e.x + e.y + e.z);
