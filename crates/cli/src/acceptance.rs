@@ -80,9 +80,11 @@ fn small_radiance_field(a: &mut TechniqueArgs) {
 fn lpv_indirect(a: &mut TechniqueArgs) {
     a.raster.ambient = Ambient::None;
     a.lpv.debug_view = DebugView::Indirect;
-    a.lpv.lpv_grid = 8;
+    a.lpv.lpv_grid = Some(8);
     a.lpv.lpv_iterations = Some(4);
     a.lpv.lpv_damping = 0.5;
+    // Against one bounce of the reference: the volume carries one.
+    a.lpv.lpv_bounces = lightlab_core::lpv::Bounces::Single;
 }
 
 fn faithful_indirect(a: &mut TechniqueArgs) {

@@ -226,7 +226,6 @@ fn demo_args(scene: &str, family: Family, quality: Quality) -> TechniqueArgs {
     };
     let lpv = if preview {
         crate::options::LpvArgs {
-            lpv_grid: 16,
             rsm_size: Some(64),
             ..Default::default()
         }

@@ -9,7 +9,7 @@ use lightlab_bake::sh_light::{SamplePoints, ShLightSettings};
 use lightlab_bake::view::Filter;
 use lightlab_bake::{BakeSettings, LightMode, Method};
 use lightlab_core::brdf::TableBits;
-use lightlab_core::lpv::Reemit;
+use lightlab_core::lpv::{Bounces, Reemit};
 use lightlab_core::sh::Window;
 use lightlab_gpu::brdf_tables::BrdfEval;
 use lightlab_gpu::lights::Attenuation;
@@ -1212,10 +1212,12 @@ impl DebugView {
 /// Options of the LPV techniques.
 #[derive(Args, Clone, Debug)]
 pub struct LpvArgs {
-    /// Cells per axis of the light propagation volume.
-    #[arg(long, default_value_t = 32)]
-    pub lpv_grid: u32,
-    /// Propagation steps (default: 8 for `lpv`, 2 for `lpv-faithful`).
+    /// Cells per axis of the light propagation volume (default: 16 for `lpv`, 32 for
+    /// `lpv-faithful`).
+    #[arg(long)]
+    pub lpv_grid: Option<u32>,
+    /// Propagation steps (default: for `lpv` 3 per cell of the grid, so that light crosses
+    /// the volume three times; 2 for `lpv-faithful`).
     #[arg(long)]
     pub lpv_iterations: Option<u32>,
     /// Reflective-shadow-map side in texels (default: for `lpv` 32 per cell of the grid, 256 to
@@ -1243,6 +1245,11 @@ pub struct LpvArgs {
     /// (Kaplanyan & Dachsbacher's original, more diffusive).
     #[arg(long, default_value = "central")]
     pub lpv_reemit: Reemit,
+    /// `lpv`: what the geometry volume does with the light it blocks: `multiple` reflects it
+    /// × the surfaces' albedo, so light keeps bouncing while it propagates (the default);
+    /// `single` absorbs it (one bounce, Kaplanyan & Dachsbacher's default).
+    #[arg(long, default_value = "multiple")]
+    pub lpv_bounces: Bounces,
     /// `lpv`: the sky's diffuse light enters the volume as this many directional RSM views
     /// (the environment split into cells around evenly spread directions), so that its bounce
     /// is shadowed like the sun's; 0 injects no sky light (at most 24 views in all).
@@ -1256,7 +1263,7 @@ pub struct LpvArgs {
 impl Default for LpvArgs {
     fn default() -> Self {
         LpvArgs {
-            lpv_grid: 32,
+            lpv_grid: None,
             lpv_iterations: None,
             rsm_size: None,
             no_lpv_occlusion: false,
@@ -1264,6 +1271,7 @@ impl Default for LpvArgs {
             lpv_cascades: 1,
             no_lpv_snap: false,
             lpv_reemit: Reemit::Central,
+            lpv_bounces: Bounces::Multiple,
             lpv_sky_lights: lightlab_gpu::lpv::DEFAULT_SKY_LIGHTS,
             debug_view: DebugView::Final,
         }
@@ -1274,20 +1282,26 @@ impl LpvArgs {
     /// The volume's settings for a scheme (`lpv`: Kaplanyan, `lpv-faithful`: WPI).
     pub fn settings(&self, scheme: LpvScheme) -> Result<LpvSettings> {
         let faithful = scheme == LpvScheme::Wpi;
+        let grid = self.lpv_grid.unwrap_or(if faithful {
+            lightlab_gpu::lpv::FAITHFUL_GRID
+        } else {
+            lightlab_gpu::lpv::DEFAULT_GRID
+        });
         let s = LpvSettings {
             scheme,
-            grid: self.lpv_grid,
+            grid,
             iterations: self.lpv_iterations,
             rsm_size: self.rsm_size.unwrap_or(if faithful {
                 256
             } else {
-                lightlab_gpu::lpv::rsm_size_for_grid(self.lpv_grid)
+                lightlab_gpu::lpv::rsm_size_for_grid(grid)
             }),
             occlusion: !self.no_lpv_occlusion,
             damping: self.lpv_damping,
             cascades: self.lpv_cascades,
             snap: !self.no_lpv_snap,
             reemit: self.lpv_reemit,
+            bounces: self.lpv_bounces,
             // The report lights its volume with the sun only (its sky is a composite term).
             sky_lights: if faithful { 0 } else { self.lpv_sky_lights },
             ..Default::default()

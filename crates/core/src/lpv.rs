@@ -142,12 +142,14 @@ pub struct Vpl {
     pub flux: Vec3,
 }
 
-/// A surfel that blocks light: position, unit normal and area [m²].
+/// A surfel that blocks light: position, unit normal, area [m²] and diffuse albedo (what it
+/// reflects of the light it blocks, with [`Bounces::Multiple`]).
 #[derive(Clone, Copy, Debug)]
 pub struct Surfel {
     pub position: Vec3,
     pub normal: Vec3,
     pub area: f32,
+    pub albedo: Vec3,
 }
 
 /// A light propagation volume: intensity SH per cell and colour.
@@ -317,11 +319,13 @@ pub fn inject(grid: Grid, vpls: &[Vpl]) -> Volume {
 pub const BLOCKER_SCALE: f32 = 4.0 / 3.0;
 
 /// The geometry volume: blocking potential SH per cell of a grid offset by half a cell, its
-/// (n+1)³ cell centres at the corners of the light volume's cells.
+/// (n+1)³ cell centres at the corners of the light volume's cells, and the surfaces' albedo
+/// there (Σ albedo·A/s² in xyz, Σ A/s² in w).
 #[derive(Clone, Debug)]
 pub struct Occlusion {
     pub grid: Grid,
     pub cells: Vec<Sh4>,
+    pub albedo: Vec<[f32; 4]>,
 }
 
 impl Occlusion {
@@ -335,34 +339,65 @@ impl Occlusion {
             cell: light.cell,
         };
         let mut cells = vec![[0.0; 4]; grid.len()];
-        let inv = BLOCKER_SCALE / (light.cell * light.cell);
+        let mut albedo = vec![[0.0; 4]; grid.len()];
+        let inv = 1.0 / (light.cell * light.cell);
         for s in surfels {
             let Some(c) = grid.cell_of(s.position) else {
                 continue;
             };
+            let i = grid.index(c);
             add_to(
-                &mut cells[grid.index(c)],
+                &mut cells[i],
                 &cosine_lobe(s.normal),
+                BLOCKER_SCALE * s.area * inv,
+            );
+            add_to(
+                &mut albedo[i],
+                &s.albedo.extend(1.0).to_array(),
                 s.area * inv,
             );
         }
-        Occlusion { grid, cells }
+        Occlusion {
+            grid,
+            cells,
+            albedo,
+        }
+    }
+
+    /// The geometry cells at the four corners of the face between light cell `c` and its
+    /// neighbour `c + axis`: light cell c's corner (i, j, k) is the geometry cell (i, j, k), so
+    /// the face towards +axis has corners with that axis at c+1 (c for negative axes).
+    fn face_corners(&self, c: IVec3, axis: IVec3) -> [usize; 4] {
+        let along = c + axis.max(IVec3::ZERO);
+        let (u, v) = perpendicular(axis);
+        [(0, 0), (1, 0), (0, 1), (1, 1)].map(|(du, dv)| self.grid.index(along + u * du + v * dv))
     }
 
     /// Transmittance of light travelling along `dir` through the face between light cell `c`
     /// and its neighbour `c + axis`: 1 − B(−dir), B averaged over the face's four corners.
     pub fn transmittance(&self, c: IVec3, axis: IVec3, dir: Vec3) -> f32 {
-        // The face's corners in geometry-grid indices: light cell c's corner (i, j, k) is the
-        // geometry cell (i, j, k); the face towards +axis has corners with that axis at c+1
-        // (c for negative axes).
-        let along = c + axis.max(IVec3::ZERO);
-        let (u, v) = perpendicular(axis);
-        let mut b = 0.0;
-        for (du, dv) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-            let g = along + u * du + v * dv;
-            b += eval(&self.cells[self.grid.index(g)], -dir);
-        }
+        let b: f32 = self
+            .face_corners(c, axis)
+            .iter()
+            .map(|&g| eval(&self.cells[g], -dir))
+            .sum();
         1.0 - (0.25 * b).clamp(0.0, 1.0)
+    }
+
+    /// The mean albedo of the surfaces at the face between light cell `c` and `c + axis`
+    /// (area-weighted over its four corners; 0 where there are none).
+    pub fn face_albedo(&self, c: IVec3, axis: IVec3) -> Vec3 {
+        let sum = self
+            .face_corners(c, axis)
+            .iter()
+            .fold(glam::Vec4::ZERO, |a, &g| {
+                a + glam::Vec4::from(self.albedo[g])
+            });
+        if sum.w > 0.0 {
+            sum.truncate() / sum.w
+        } else {
+            Vec3::ZERO
+        }
     }
 }
 
@@ -405,10 +440,33 @@ crate::named_enum!(Reemit, "re-emission", {
     FaceNormal => "face",
 }, aliases { "face-normal" => FaceNormal });
 
+/// What becomes of the light the geometry volume blocks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Bounces {
+    /// It is absorbed: the volume carries one bounce (Kaplanyan & Dachsbacher's default).
+    Single,
+    /// It is reflected back into the cell it came from, × the blocking surfaces' albedo, as a
+    /// cosine lobe facing back (CLPV §5.3's multiple bounces): light keeps bouncing for as many
+    /// steps as the propagation runs. lightlab's default.
+    #[default]
+    Multiple,
+}
+
+crate::named_enum!(Bounces, "bounce mode", {
+    Single => "single",
+    Multiple => "multiple",
+});
+
 /// One propagation step (Kaplanyan's 6-face scheme, the side faces' light re-emitted as
 /// `reemit` says): returns only the newly arrived light. With an occlusion volume, light
-/// crossing into the receiving cell is attenuated by its transmittance.
-pub fn propagate_step(src: &Volume, occlusion: Option<&Occlusion>, reemit: Reemit) -> Volume {
+/// crossing into the receiving cell is attenuated by its transmittance, and with
+/// [`Bounces::Multiple`] what the face blocks is reflected ([`reflected`]).
+pub fn propagate_step(
+    src: &Volume,
+    occlusion: Option<&Occlusion>,
+    reemit: Reemit,
+    bounces: Bounces,
+) -> Volume {
     let g = src.grid;
     // Per axis d, the receiving cell's 5 faces: the direction from the source centre to the
     // face centre, and the cosine lobe (around the face normal, or that direction) scaled by
@@ -451,9 +509,49 @@ pub fn propagate_step(src: &Volume, occlusion: Option<&Occlusion>, reemit: Reemi
                 }
             }
         }
+        if let (Some(o), Bounces::Multiple) = (occlusion, bounces) {
+            reflected(src, o, c, &faces, &mut acc);
+        }
         out.cells[g.index(c)] = acc;
     }
     out
+}
+
+/// Multiple bounces (Kaplanyan & Dachsbacher 2010, §5.3), in gather form: the light cell `c`
+/// sends towards each neighbour the flux Σ_f ΔΩ_f·I(ω_f) over that neighbour's five faces
+/// (what the neighbour gathers); the part its shared face blocks, 1 − T, meets a surface and
+/// comes back into `c` × the face's albedo, as a cosine lobe facing back along −axis. Only
+/// light that was blocked is reflected, and at most all of it, so the step still conserves
+/// flux for albedos ≤ 1.
+fn reflected(src: &Volume, o: &Occlusion, c: IVec3, faces: &[[(Vec3, Sh4); 5]; 6], acc: &mut Cell) {
+    let own = src.at(c);
+    for (d, faces) in AXES.iter().zip(faces) {
+        if !src.grid.contains(c + *d) {
+            continue;
+        }
+        let dv = d.as_vec3();
+        let blocked = 1.0 - o.transmittance(c, *d, dv);
+        if blocked <= 0.0 {
+            continue;
+        }
+        let rho = o.face_albedo(c, *d) * blocked;
+        let lobe = scaled(&cosine_lobe(-dv), 1.0 / std::f32::consts::PI);
+        for ch in 0..3 {
+            let flux: f32 = faces
+                .iter()
+                .enumerate()
+                .map(|(k, (w, _))| {
+                    let solid = if k == 0 {
+                        SOLID_ANGLE_FAR
+                    } else {
+                        SOLID_ANGLE_SIDE
+                    };
+                    solid * eval(&own[ch], *w)
+                })
+                .sum();
+            add_to(&mut acc[ch], &lobe, rho[ch] * flux.max(0.0));
+        }
+    }
 }
 
 /// Seed plus `iterations` propagation steps, accumulated. Occlusion (if any) is skipped on the
@@ -463,11 +561,13 @@ pub fn propagate(
     occlusion: Option<&Occlusion>,
     iterations: u32,
     reemit: Reemit,
+    bounces: Bounces,
 ) -> Volume {
     let mut acc = seed.clone();
     let mut cur = seed.clone();
     for i in 0..iterations {
-        cur = propagate_step(&cur, if i == 0 { None } else { occlusion }, reemit);
+        let occ = if i == 0 { None } else { occlusion };
+        cur = propagate_step(&cur, occ, reemit, bounces);
         acc.accumulate(&cur);
     }
     acc
@@ -619,7 +719,7 @@ mod tests {
             for reemit in [Reemit::FaceNormal, Reemit::Central] {
                 let mut cur = seed.clone();
                 for it in 0..6 {
-                    cur = propagate_step(&cur, None, reemit);
+                    cur = propagate_step(&cur, None, reemit, Bounces::Single);
                     let f = cur.total_flux();
                     let err = ((f - vpl.flux) / vpl.flux).abs().max_element();
                     assert!(
@@ -673,9 +773,10 @@ mod tests {
         let f0 = v.total_flux().x;
         let wpi = propagate_step_wpi(&propagate_step_wpi(&v)).total_flux().x;
         let six = propagate_step(
-            &propagate_step(&v, None, Reemit::FaceNormal),
+            &propagate_step(&v, None, Reemit::FaceNormal, Bounces::Single),
             None,
             Reemit::FaceNormal,
+            Bounces::Single,
         )
         .total_flux()
         .x;
@@ -725,6 +826,7 @@ mod tests {
                     position: Vec3::new(5.0, y as f32 * 0.25, z as f32 * 0.25),
                     normal: -Vec3::X,
                     area: 0.0625,
+                    albedo: Vec3::splat(0.5),
                 });
             }
         }
@@ -739,6 +841,61 @@ mod tests {
             occ.transmittance(IVec3::new(2, 5, 5), IVec3::X, Vec3::X),
             1.0
         );
+    }
+
+    /// Multiple bounces: light meeting a wall of albedo ½ comes back into its cell as a lobe
+    /// facing away from the wall, carrying ½ × what the wall blocked of the flux the cell sent
+    /// towards it (measured as what the neighbour receives without the wall); nothing is
+    /// created (the step's output flux ≤ its input).
+    #[test]
+    fn a_wall_reflects_what_it_blocks_times_its_albedo() {
+        let g = grid(10);
+        let mut surfels = Vec::new();
+        for y in 0..40 {
+            for z in 0..40 {
+                surfels.push(Surfel {
+                    position: Vec3::new(5.0, y as f32 * 0.25, z as f32 * 0.25),
+                    normal: -Vec3::X,
+                    area: 0.0625,
+                    albedo: Vec3::new(0.5, 0.25, 0.0),
+                });
+            }
+        }
+        let occ = Occlusion::inject(g, &surfels);
+        let c = IVec3::new(4, 5, 5);
+        assert!((occ.face_albedo(c, IVec3::X) - Vec3::new(0.5, 0.25, 0.0)).length() < 1e-5);
+        assert_eq!(occ.face_albedo(IVec3::new(2, 5, 5), IVec3::X), Vec3::ZERO);
+        let mut v = Volume::new(g);
+        let lobe = scaled(&cosine_lobe(Vec3::X), 1.0 / std::f32::consts::PI);
+        v.cells[g.index(c)] = [lobe; 3];
+        let k = 4.0 * std::f32::consts::PI * Y00;
+        let free = propagate_step(&v, None, Reemit::Central, Bounces::Single);
+        assert!(1.0 - occ.transmittance(c, IVec3::X, Vec3::X) > 0.95);
+        // Σ over the six faces of blocked × sent (the wall's corners touch the side faces too:
+        // a 2-band blocker's constant term blocks a little in every direction).
+        let lost: f32 = AXES
+            .iter()
+            .map(|d| {
+                let blocked = 1.0 - occ.transmittance(c, *d, d.as_vec3());
+                blocked * free.at(c + *d)[0][0] * k
+            })
+            .sum();
+        let single = propagate_step(&v, Some(&occ), Reemit::Central, Bounces::Single);
+        let multi = propagate_step(&v, Some(&occ), Reemit::Central, Bounces::Multiple);
+        let back = multi.at(c);
+        for (ch, rho) in [0.5f32, 0.25, 0.0].into_iter().enumerate() {
+            let want = rho * lost;
+            let got = back[ch][0] * k;
+            assert!(
+                (got - want).abs() < 1e-4 + 1e-3 * want,
+                "{ch}: {got} vs {want}"
+            );
+            // Facing −x (Y11 ∝ x is the fourth coefficient).
+            assert!(back[ch][3] <= 0.0);
+        }
+        assert_eq!(single.at(c)[0], [0.0; 4]);
+        let (fm, f0) = (multi.total_flux(), v.total_flux());
+        assert!(fm.x <= f0.x && fm.x > single.total_flux().x, "{fm} vs {f0}");
     }
 
     #[test]
@@ -775,7 +932,13 @@ mod tests {
                 });
             }
         }
-        let own = propagate(&inject(g, &floor), None, 8, Reemit::FaceNormal);
+        let own = propagate(
+            &inject(g, &floor),
+            None,
+            8,
+            Reemit::FaceNormal,
+            Bounces::Single,
+        );
         let p = Vec3::new(8.0, 2.0, 8.0);
         let plain = own.irradiance(p, Vec3::Y).x;
         let damped = own.irradiance_damped(p, Vec3::Y, 2.0).x;
@@ -786,7 +949,13 @@ mod tests {
             normal: -Vec3::Y,
             flux: Vec3::ONE,
         }];
-        let other = propagate(&inject(g, &above), None, 8, Reemit::FaceNormal);
+        let other = propagate(
+            &inject(g, &above),
+            None,
+            8,
+            Reemit::FaceNormal,
+            Bounces::Single,
+        );
         let plain = other.irradiance(p, Vec3::Y).x;
         let damped = other.irradiance_damped(p, Vec3::Y, 2.0).x;
         assert!(plain > 0.0);
@@ -865,7 +1034,7 @@ mod tests {
             let mut acc = seed.clone();
             let mut radius = vec![];
             for _ in 0..16 {
-                cur = propagate_step(&cur, None, reemit);
+                cur = propagate_step(&cur, None, reemit, Bounces::Single);
                 acc.accumulate(&cur);
                 let (mut m, mut w) = (0.0f64, 0.0f64);
                 for c in g.cells() {

@@ -2,6 +2,7 @@
 //! with the GPU's own reflective shadow map (issue 7). Runs on lavapipe in CI.
 
 use glam::Vec3;
+use lightlab_core::image::Image;
 use lightlab_core::lpv::{self, Occlusion, Surfel, Volume, Vpl};
 use lightlab_gpu::lpv::{LpvScheme, LpvSettings, rsm_lights};
 use lightlab_gpu::raster::{Ambient, RasterSettings, Renderer, ShadowMethod};
@@ -77,10 +78,18 @@ fn cpu_volume(
         } else {
             (eye - pos).normalize()
         };
+        // The albedo as the injection recovers it: Φ / (colour × w × A).
+        let lit = Vec3::from_array(light.color) * (f[3] * p[3]);
+        let albedo = Vec3::select(
+            lit.cmpgt(Vec3::ZERO),
+            flux / lit.max(Vec3::splat(1e-30)),
+            Vec3::ZERO,
+        );
         surfels.push(Surfel {
             position: pos,
             normal: nrm,
             area: p[3] / nrm.dot(to_light).abs().max(0.25),
+            albedo: albedo.min(Vec3::ONE),
         });
     }
     let seed = lpv::inject(grid, &vpls);
@@ -93,6 +102,7 @@ fn cpu_volume(
         occ.as_ref(),
         l.settings.iterations(),
         l.settings.reemit,
+        l.settings.bounces,
     )
 }
 
@@ -189,8 +199,9 @@ fn wpi_propagation_on_the_gpu_grows_like_the_report() {
     );
 }
 
-/// The reference's light after exactly one bounce (path depth 2), at 64×64.
-fn reference_one_bounce(scene: &Scene) -> lightlab_core::image::Image {
+/// The reference's indirect light at 64×64: paths of 2 to `max_depth` segments (2: exactly
+/// one bounce).
+fn reference_indirect(scene: &Scene, max_depth: u32) -> lightlab_core::image::Image {
     let accel = lightlab_trace::Accel::new(scene);
     let pt = lightlab_trace::PathTracer::new(scene, &accel);
     let s = lightlab_trace::RenderSettings {
@@ -198,7 +209,7 @@ fn reference_one_bounce(scene: &Scene) -> lightlab_core::image::Image {
         height: 64,
         spp: 512,
         min_depth: 2,
-        max_depth: 2,
+        max_depth,
         ..Default::default()
     };
     pt.render(&s, &|_, _| true).unwrap()
@@ -221,56 +232,24 @@ fn fit_constant(a: &lightlab_core::image::Image, r: &lightlab_core::image::Image
     Vec3::from_array(c)
 }
 
-#[test]
-fn lpv_indirect_light_on_cornell_against_one_bounce_of_the_reference() {
-    // Issue 7's measurement: indirect light only, against a path-traced reference of exactly one
-    // bounce, beside the best constant ambient term and lpv-faithful. The target (lpv at most
-    // half the ambient's relMSE) is met on a grid that suits this closed box (8³, 4 steps,
-    // damping ½) with the side faces' light re-emitted along its direction (Reemit::Central);
-    // Kaplanyan's face-normal re-emission does not reach it at any setting (docs/lpv.md).
-    let Some(ctx) = test_context() else { return };
-    let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
-    let reference = reference_one_bounce(&scene);
-    let render_with = |s: &LpvSettings| {
-        let mut r = render_lpv(&ctx, &scene, s);
-        r.render(&ctx);
-        r.read_hdr(&ctx).unwrap()
-    };
-    let render = |scheme| {
-        let s = LpvSettings {
-            scheme,
-            ..Default::default()
-        };
-        let mut r = render_lpv(&ctx, &scene, &s);
-        r.render(&ctx);
-        r.read_hdr(&ctx).unwrap()
-    };
-    // relMSE's ε = 0.01 assumes values near 1: all images are scaled so that the reference's
-    // mean luminance is 1 (the comparison is then independent of the light's intensity).
+/// relMSE of `img` against `reference`, both scaled so that the reference's mean luminance is
+/// 1 (relMSE's ε = 0.01 assumes values near 1; the comparison is then independent of the
+/// light's intensity).
+fn relmse_scaled(img: &Image, reference: &Image) -> f64 {
     let k = 1.0 / lightlab_core::color::luminance(reference.mean()).max(1e-12);
-    let scaled = |img: &lightlab_core::image::Image| {
-        let mut o = img.clone();
+    let scaled = |i: &Image| {
+        let mut o = i.clone();
         for p in &mut o.data {
             *p *= k;
         }
         o
     };
-    let reference = scaled(&reference);
-    let lpv_img = scaled(&render(LpvScheme::Kaplanyan));
-    let lpv = lightlab_core::metrics::relmse(&lpv_img, &reference).unwrap();
-    if let Ok(dir) = std::env::var("LIGHTLAB_TEST_OUT") {
-        let ldr = lightlab_core::image::LdrSettings::default();
-        let _ = lpv_img.write(&std::path::Path::new(&dir).join("lpv_cornell.png"), ldr);
-        let _ = reference.write(&std::path::Path::new(&dir).join("lpv_cornell_ref.png"), ldr);
-        let err = lightlab_core::image::Image::from_fn(64, 64, |x, y| {
-            let (a, b) = (lpv_img.get(x, y), reference.get(x, y));
-            (a - b) * (a - b) / (b * b + Vec3::splat(0.01))
-        });
-        let _ = err.write(&std::path::Path::new(&dir).join("lpv_cornell_err.exr"), ldr);
-        let _ = err.write(&std::path::Path::new(&dir).join("lpv_cornell_err.png"), ldr);
-    }
-    let wpi = lightlab_core::metrics::relmse(&scaled(&render(LpvScheme::Wpi)), &reference).unwrap();
-    // Diffuse albedo: a unit constant sky, no lights, no emission.
+    lightlab_core::metrics::relmse(&scaled(img), &scaled(reference)).unwrap()
+}
+
+/// The scene's diffuse albedo as the renderer sees it (a unit constant sky, unoccluded; no
+/// lights, no emission), for the constant-ambient baseline.
+fn albedo_image(ctx: &GpuContext, scene: &Scene) -> Image {
     let mut plain = scene.clone();
     plain.lights.clear();
     for m in &mut plain.materials {
@@ -281,64 +260,113 @@ fn lpv_indirect_light_on_cornell_against_one_bounce_of_the_reference() {
         height: 64,
         shadows: ShadowMethod::None,
         ambient: Ambient::Constant(Vec3::ONE),
-        // The albedo: the constant sky unoccluded (inside the box it would be shadowed).
         sky_occlusion: 0,
         ..Default::default()
     };
-    let mut r = Renderer::new(&ctx, &plain, rs).unwrap();
-    r.render(&ctx);
-    let albedo = r.read_hdr(&ctx).unwrap();
-    let c = fit_constant(&albedo, &reference);
+    let mut r = Renderer::new(ctx, &plain, rs).unwrap();
+    r.render(ctx);
+    r.read_hdr(ctx).unwrap()
+}
+
+/// The best constant ambient term against `reference`: albedo × c, c fitted per channel to
+/// the reference scaled as [`relmse_scaled`] scales it.
+fn ambient_relmse(albedo: &Image, reference: &Image) -> f64 {
+    let k = 1.0 / lightlab_core::color::luminance(reference.mean()).max(1e-12);
+    let mut scaled = reference.clone();
+    for p in &mut scaled.data {
+        *p *= k;
+    }
+    let c = fit_constant(albedo, &scaled);
     let mut ambient = albedo.clone();
     for p in &mut ambient.data {
         *p *= c;
     }
-    let amb = lightlab_core::metrics::relmse(&ambient, &reference).unwrap();
-    eprintln!(
-        "cornell, one indirect bounce, 64²: relMSE lpv {lpv:.4}, lpv-faithful {wpi:.4}, fitted ambient {amb:.4} (c = {c})"
-    );
-    // Variants: no damping, the coarse grid that suits this closed box (the acceptance setting),
-    // Kaplanyan's re-emission there, cascades.
-    let variant = |s: LpvSettings| {
-        lightlab_core::metrics::relmse(&scaled(&render_with(&s)), &reference).unwrap()
+    lightlab_core::metrics::relmse(&ambient, &scaled).unwrap()
+}
+
+#[test]
+fn lpv_indirect_light_on_cornell_against_the_reference() {
+    // Issue 7's measurement, at default settings (issue 22): the volume's indirect light only,
+    // beside the best constant ambient term fitted to the same reference. `lpv`'s defaults
+    // (16³, 48 steps, multiple bounces) against all of the reference's indirect light; the
+    // one-bounce variants (and lpv-faithful, a one-bounce scheme) against exactly one bounce,
+    // where issue 7's target was first met on a grid that suits this closed box (8³, 4 steps,
+    // damping ½, side faces re-emitted along their direction; Kaplanyan's face-normal
+    // re-emission does not reach it at any setting, docs/lpv.md).
+    let Some(ctx) = test_context() else { return };
+    let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
+    let all = reference_indirect(&scene, 16);
+    let one = reference_indirect(&scene, 2);
+    let albedo = albedo_image(&ctx, &scene);
+    let render = |s: &LpvSettings| {
+        let mut r = render_lpv(&ctx, &scene, s);
+        r.render(&ctx);
+        r.read_hdr(&ctx).unwrap()
     };
     let d = LpvSettings::default();
-    let undamped = variant(LpvSettings {
-        damping: 0.0,
-        ..d.clone()
-    });
+    let lpv_img = render(&d);
+    let lpv = relmse_scaled(&lpv_img, &all);
+    if let Ok(dir) = std::env::var("LIGHTLAB_TEST_OUT") {
+        let ldr = lightlab_core::image::LdrSettings::default();
+        let _ = lpv_img.write(&std::path::Path::new(&dir).join("lpv_cornell.png"), ldr);
+        let _ = all.write(&std::path::Path::new(&dir).join("lpv_cornell_ref.png"), ldr);
+    }
+    let (amb_all, amb_one) = (ambient_relmse(&albedo, &all), ambient_relmse(&albedo, &one));
+    let undamped = relmse_scaled(
+        &render(&LpvSettings {
+            damping: 0.0,
+            ..d.clone()
+        }),
+        &all,
+    );
+    let wpi = relmse_scaled(
+        &render(&LpvSettings {
+            scheme: LpvScheme::Wpi,
+            grid: lightlab_gpu::lpv::FAITHFUL_GRID,
+            ..d.clone()
+        }),
+        &one,
+    );
     let box_grid = LpvSettings {
         grid: 8,
         iterations: Some(4),
         damping: 0.5,
+        bounces: lightlab_core::lpv::Bounces::Single,
         ..d.clone()
     };
-    let coarse = variant(box_grid.clone());
-    let coarse_face = variant(LpvSettings {
-        reemit: lightlab_core::lpv::Reemit::FaceNormal,
-        ..box_grid.clone()
-    });
-    let cascaded = variant(LpvSettings {
-        cascades: 3,
-        ..d.clone()
-    });
-    eprintln!(
-        "  lpv without damping {undamped:.4}; 8³, 4 steps, damping ½: {coarse:.4} (face-normal \
-         re-emission {coarse_face:.4}); 32³ × 3 cascades {cascaded:.4}"
+    let coarse = relmse_scaled(&render(&box_grid), &one);
+    let coarse_face = relmse_scaled(
+        &render(&LpvSettings {
+            reemit: lightlab_core::lpv::Reemit::FaceNormal,
+            ..box_grid.clone()
+        }),
+        &one,
     );
-    assert!(lpv < 0.5 * wpi, "lpv {lpv} vs lpv-faithful {wpi}");
+    eprintln!(
+        "cornell indirect light, 64², relMSE: lpv defaults {lpv:.4} against all bounces \
+         (fitted ambient {amb_all:.4}, no damping {undamped:.4}); one bounce: 8³, 4 steps, \
+         damping ½ {coarse:.4} (face-normal re-emission {coarse_face:.4}), lpv-faithful \
+         {wpi:.4}, fitted ambient {amb_one:.4}"
+    );
+    // Issue 22 asks for issue 7's target at default settings (≤ ½ the ambient's): not met
+    // yet (0.399 against 0.381, docs/lpv.md); this bounds a regression. (32³ × 8 steps with
+    // one bounce scored 0.454 against one bounce.)
+    assert!(lpv < 0.45, "defaults regressed: {lpv} (ambient {amb_all})");
     assert!(lpv < 0.8 * undamped, "damping helps: {lpv} vs {undamped}");
-    assert!(lpv < 0.55, "lpv regressed: {lpv} (was 0.454)");
-    // The issue's target (measured 0.191 against 0.5 × 0.408 = 0.204, session 9).
+    assert!(coarse < 0.5 * wpi, "lpv {coarse} vs lpv-faithful {wpi}");
+    // Issue 7's target with one bounce (measured 0.191 against 0.5 × 0.408, session 9).
     assert!(
-        coarse <= 0.5 * amb,
-        "8³: {coarse} vs half the ambient's {amb}"
+        coarse <= 0.5 * amb_one,
+        "8³: {coarse} vs half the ambient's {amb_one}"
     );
     assert!(
         coarse < 0.9 * coarse_face,
         "central {coarse} vs face normal {coarse_face}"
     );
-    assert!(amb < 0.5, "the fitted ambient baseline: {amb}");
+    assert!(
+        amb_one < 0.5 && amb_all < 0.5,
+        "the ambient baselines: {amb_one}, {amb_all}"
+    );
 }
 
 #[test]

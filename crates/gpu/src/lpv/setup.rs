@@ -29,6 +29,7 @@ pub(super) fn uniform_slots(
         store_last: (settings.scheme == LpvScheme::Wpi) as u32,
         occlusion: gv_on as u32,
         reemit: (settings.reemit == lpv::Reemit::Central) as u32,
+        bounces: (settings.bounces == lpv::Bounces::Multiple) as u32,
         wind_a: wind.uniform()[0],
         wind_b: wind.uniform()[1],
         ..Default::default()
@@ -334,14 +335,15 @@ pub(super) fn cascade(device: &wgpu::Device, c: &CascadeInputs, n: u32) -> Casca
     };
     let (read, none) = (wgpu::BufferUsages::COPY_SRC, wgpu::BufferUsages::empty());
     let lpv_atomic = storage("lpv atomics", cells * CELL_BYTES, none);
-    // Blockers from the lights, then from the camera.
-    let gv_atomic = storage("gv atomics", 2 * gv_cells * 16, none);
+    // Blockers from the lights, then from the camera, then the albedo of both.
+    let gv_atomic = storage("gv atomics", 3 * gv_cells * 16, none);
     let buffers = [
         storage("lpv a", cells * CELL_BYTES, read),
         storage("lpv b", cells * CELL_BYTES, read),
     ];
     let accum = storage("lpv accumulation", cells * CELL_BYTES, read);
-    let gv = storage("geometry volume", gv_cells * 16, read);
+    // Per cell: the blocking SH, then the albedo sums (Σ albedo·A, Σ A).
+    let gv = storage("geometry volume", 2 * gv_cells * 16, read);
     let group = |src: &wgpu::Buffer, dst: &wgpu::Buffer, rsm: &[wgpu::TextureView]| {
         let e = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         let view = wgpu::BindingResource::TextureView;

@@ -37,7 +37,8 @@ struct LpvUniforms {
     // Side faces' re-emission: 0 a cosine lobe around the face normal (Kaplanyan), 1 around
     // the direction the light travelled (lightlab_core::lpv::Reemit).
     reemit: u32,
-    pad1: u32,
+    // 1: light the geometry volume blocks is reflected × its albedo (multiple bounces).
+    bounces: u32,
     pad2: u32,
     // Wind sway, as FrameUniforms.
     wind_a: vec4<f32>,
@@ -100,7 +101,9 @@ fn rsm_vs(v: VertexIn) -> RsmVertex {
 }
 
 struct RsmTexel {
-    // Reflected flux Φ [W] (diffuse albedo × the light's flux through the texel).
+    // Reflected flux Φ [W] (diffuse albedo × the light's flux through the texel); w = the
+    // light's flux per unit colour and area of the texel (Φ = albedo × colour × w × A), so
+    // that the injection can recover the albedo. The camera's view (kind 3): albedo, w = 1.
     @location(0) flux: vec4<f32>,
     // Unit normal turned towards the light; w = diffuse transmission (thin foliage).
     @location(1) normal: vec4<f32>,
@@ -115,7 +118,8 @@ fn rsm_fs(in: RsmVertex) -> RsmTexel {
         discard;
     }
     var to_light = -light.axis;
-    var flux_in = light.color * light.texel;
+    // The light's flux through the texel per unit colour (× light.color).
+    var per_colour = light.texel;
     var area = light.texel;
     if light.kind != 0u {
         let d = in.world - light.eye;
@@ -128,20 +132,25 @@ fn rsm_fs(in: RsmVertex) -> RsmTexel {
         to_light = -w;
         if light.kind == 1u {
             let s = clamp((c - light.cos_outer) / max(light.cos_inner - light.cos_outer, 1e-4), 0.0, 1.0);
-            flux_in = light.color * (s * s) * solid;
+            per_colour = (s * s) * solid;
         } else if light.kind == 4u {
-            flux_in = light.color * profile_lookup(light.profile, light.nadir, light.c0, w) * solid;
+            per_colour = profile_lookup(light.profile, light.nadir, light.c0, w) * solid;
         } else {
             // A Lambertian emitter: I(θ) = L·A·cosθ.
-            flux_in = light.color * c * solid;
+            per_colour = c * solid;
         }
     }
     var n = safe_normalize(in.normal, to_light);
     if dot(n, to_light) < 0.0 {
         n = -n;
     }
+    let albedo = base.rgb * (1.0 - material.metallic);
     var o: RsmTexel;
-    o.flux = vec4<f32>(base.rgb * (1.0 - material.metallic) * flux_in, 0.0);
+    if light.kind == 3u {
+        o.flux = vec4<f32>(albedo, 1.0);
+    } else {
+        o.flux = vec4<f32>(albedo * light.color * per_colour, per_colour / max(area, 1e-30));
+    }
     o.normal = vec4<f32>(n, material_transmission(in.uv0, in.uv1));
     o.position = vec4<f32>(in.world, area);
     return o;
@@ -215,27 +224,34 @@ fn inject_cs(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let nrm = textureLoad(rsm_normal, t, 0);
     let n = safe_normalize(nrm.xyz, vec3<f32>(0.0, 1.0, 0.0));
+    let f = textureLoad(rsm_flux, t, 0);
     if light.kind == 3u {
         // The camera's surfels: blockers of their own half of the geometry atomics.
         if lpv.occlusion == 1u {
-            inject_blocker(pos.xyz, n, pos.w);
+            inject_blocker(pos.xyz, n, pos.w, f.rgb);
         }
         return;
     }
-    let flux = textureLoad(rsm_flux, t, 0).rgb;
+    let flux = f.rgb;
     let tr = clamp(nrm.w, 0.0, 1.0);
     inject_vpl(pos.xyz, n, flux * (1.0 - tr));
     if tr > 0.0 {
         inject_vpl(pos.xyz, -n, flux * tr);
     }
     if lpv.occlusion == 1u && light.sky == 0u {
-        inject_blocker(pos.xyz, n, pos.w);
+        inject_blocker(pos.xyz, n, pos.w, rsm_albedo(f, pos.w));
     }
+}
+
+// The albedo behind a light's RSM texel: Φ / (colour × w × A); 0 in channels the light lacks.
+fn rsm_albedo(f: vec4<f32>, area: f32) -> vec3<f32> {
+    let lit = light.color * (f.w * area);
+    return select(vec3<f32>(0.0), f.rgb / max(lit, vec3<f32>(1e-30)), lit > vec3<f32>(0.0));
 }
 
 // A blocker of area A⊥/|n·l| (capped at 4·A⊥) in the geometry volume, whose cells are centred on
 // the light volume's cell corners.
-fn inject_blocker(p: vec3<f32>, n: vec3<f32>, area_perp: f32) {
+fn inject_blocker(p: vec3<f32>, n: vec3<f32>, area_perp: f32, albedo: vec3<f32>) {
     var to_light = -light.axis;
     if light.kind != 0u {
         to_light = normalize(light.eye - p);
@@ -246,13 +262,22 @@ fn inject_blocker(p: vec3<f32>, n: vec3<f32>, area_perp: f32) {
     if !inside(c, gn) {
         return;
     }
-    let q = vec4<i32>(round(cosine_lobe(n) * (BLOCKER_SCALE * area / (lpv.cell * lpv.cell)) * lpv.gv_scale));
-    // Light views fill the first half of the atomics, the camera the second.
-    let base = cell_index(c, gn) * 4 + select(0, gn * gn * gn * 4, light.kind == 3u);
+    let a = area / (lpv.cell * lpv.cell) * lpv.gv_scale;
+    let q = vec4<i32>(round(cosine_lobe(n) * (BLOCKER_SCALE * a)));
+    // Light views fill the first third of the atomics, the camera the second; the albedo
+    // (Σ albedo·A, Σ A) of both goes to the last.
+    let gcells = gn * gn * gn * 4;
+    let base = cell_index(c, gn) * 4 + select(0, gcells, light.kind == 3u);
     atomicAdd(&gv_atomic[base + 0], q.x);
     atomicAdd(&gv_atomic[base + 1], q.y);
     atomicAdd(&gv_atomic[base + 2], q.z);
     atomicAdd(&gv_atomic[base + 3], q.w);
+    let r = vec4<i32>(round(vec4<f32>(clamp(albedo, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0) * a));
+    let ab = cell_index(c, gn) * 4 + 2 * gcells;
+    atomicAdd(&gv_atomic[ab + 0], r.x);
+    atomicAdd(&gv_atomic[ab + 1], r.y);
+    atomicAdd(&gv_atomic[ab + 2], r.z);
+    atomicAdd(&gv_atomic[ab + 3], r.w);
 }
 
 // Fixed point → float: the seed goes to `dst` and to the accumulation; the geometry volume to gv.
@@ -277,7 +302,14 @@ fn resolve_cs(@builtin(global_invocation_id) id: vec3<u32>) {
         ) / lpv.gv_scale;
         // A surface seen by a light and by the camera is one blocker, not two: per cell, the
         // source with more blocking area.
-        gv[gi] = select(from_lights, from_camera, from_camera.x > from_lights.x);
+        gv[2 * gi] = select(from_lights, from_camera, from_camera.x > from_lights.x);
+        let a = b + 2 * i32(gn * gn * gn * 4u);
+        gv[2 * gi + 1] = vec4<f32>(
+            f32(atomicLoad(&gv_atomic[a])),
+            f32(atomicLoad(&gv_atomic[a + 1])),
+            f32(atomicLoad(&gv_atomic[a + 2])),
+            f32(atomicLoad(&gv_atomic[a + 3])),
+        ) / lpv.gv_scale;
     }
     if any(id >= vec3<u32>(lpv.n)) {
         return;
@@ -304,9 +336,9 @@ fn axis_of(k: u32) -> vec3<i32> {
     return a;
 }
 
-// Transmittance of light travelling along `dir` through the face between cell c and c + axis:
-// 1 − B(−dir), B averaged over the face's four corners of the geometry volume.
-fn transmittance(c: vec3<i32>, axis: vec3<i32>, dir: vec3<f32>) -> f32 {
+// The geometry volume's cells (gv: blocking SH at 2i, albedo sums at 2i + 1) at the four
+// corners of the face between cell c and c + axis.
+fn face_corners(c: vec3<i32>, axis: vec3<i32>) -> array<i32, 4> {
     let along = c + max(axis, vec3<i32>(0));
     var u = vec3<i32>(0, 1, 0);
     var v = vec3<i32>(0, 0, 1);
@@ -317,13 +349,74 @@ fn transmittance(c: vec3<i32>, axis: vec3<i32>, dir: vec3<f32>) -> f32 {
         v = vec3<i32>(0, 1, 0);
     }
     let gn = i32(lpv.n) + 1;
+    return array<i32, 4>(
+        cell_index(along, gn),
+        cell_index(along + u, gn),
+        cell_index(along + v, gn),
+        cell_index(along + u + v, gn),
+    );
+}
+
+// Transmittance of light travelling along `dir` through the face between cell c and c + axis:
+// 1 − B(−dir), B averaged over the face's four corners of the geometry volume.
+fn transmittance(c: vec3<i32>, axis: vec3<i32>, dir: vec3<f32>) -> f32 {
+    let g = face_corners(c, axis);
     let y = sh_basis(-dir);
     var b = 0.0;
-    b += dot(gv[cell_index(along, gn)], y);
-    b += dot(gv[cell_index(along + u, gn)], y);
-    b += dot(gv[cell_index(along + v, gn)], y);
-    b += dot(gv[cell_index(along + u + v, gn)], y);
+    for (var k = 0; k < 4; k++) {
+        b += dot(gv[2 * g[k]], y);
+    }
     return 1.0 - clamp(0.25 * b, 0.0, 1.0);
+}
+
+// The mean albedo of the surfaces at that face (0 where there are none).
+fn face_albedo(c: vec3<i32>, axis: vec3<i32>) -> vec3<f32> {
+    let g = face_corners(c, axis);
+    var a = vec4<f32>(0.0);
+    for (var k = 0; k < 4; k++) {
+        a += gv[2 * g[k] + 1];
+    }
+    return select(vec3<f32>(0.0), a.xyz / max(a.w, 1e-30), a.w > 0.0);
+}
+
+// Multiple bounces (lightlab_core::lpv::reflected): the light this cell sends through each
+// face, where the face blocks it, comes back × the face's albedo as a lobe facing back.
+fn reflected(c: vec3<i32>) -> array<vec4<f32>, 3> {
+    let nn = i32(lpv.n);
+    var acc = array<vec4<f32>, 3>(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    let ci = cell_index(c, nn) * 3;
+    let own = array<vec4<f32>, 3>(src[ci], src[ci + 1], src[ci + 2]);
+    for (var k = 0u; k < 6u; k++) {
+        let d = axis_of(k);
+        if !inside(c + d, nn) {
+            continue;
+        }
+        let dv = vec3<f32>(d);
+        let blocked = 1.0 - transmittance(c, d, dv);
+        if blocked <= 0.0 {
+            continue;
+        }
+        let yf = sh_basis(dv);
+        var f = vec3<f32>(0.0);
+        for (var ch = 0; ch < 3; ch++) {
+            f[ch] = SOLID_FAR * dot(own[ch], yf);
+        }
+        for (var j = 0u; j < 6u; j++) {
+            if j / 2u == k / 2u {
+                continue;
+            }
+            let y = sh_basis(normalize(dv + 0.5 * vec3<f32>(axis_of(j))));
+            for (var ch = 0; ch < 3; ch++) {
+                f[ch] += SOLID_SIDE * dot(own[ch], y);
+            }
+        }
+        let rho = face_albedo(c, d) * blocked;
+        let back = cosine_lobe(-dv) / PI;
+        for (var ch = 0; ch < 3; ch++) {
+            acc[ch] += back * (rho[ch] * max(f[ch], 0.0));
+        }
+    }
+    return acc;
 }
 
 // Kaplanyan: gather from the 6 face neighbours onto the 5 faces of this cell, each face's flux
@@ -371,6 +464,12 @@ fn propagate_cs(@builtin(global_invocation_id) id: vec3<u32>) {
             for (var ch = 0; ch < 3; ch++) {
                 acc[ch] += l * dot(source[ch], y);
             }
+        }
+    }
+    if lpv.use_gv == 1u && lpv.bounces == 1u {
+        let r = reflected(c);
+        for (var ch = 0; ch < 3; ch++) {
+            acc[ch] += r[ch];
         }
     }
     let i = cell_index(c, nn) * 3;
