@@ -1250,6 +1250,10 @@ pub struct LpvArgs {
     /// `single` absorbs it (one bounce, Kaplanyan & Dachsbacher's default).
     #[arg(long, default_value = "multiple")]
     pub lpv_bounces: Bounces,
+    /// `lpv`: do not darken the volume's light by occluders nearer than its lookup reaches
+    /// (read from the sky's depth maps; scenes without an environment have none).
+    #[arg(long)]
+    pub no_lpv_near_occlusion: bool,
     /// `lpv`: the sky's diffuse light enters the volume as this many directional RSM views
     /// (the environment split into cells around evenly spread directions), so that its bounce
     /// is shadowed like the sun's; 0 injects no sky light (at most 24 views in all).
@@ -1272,6 +1276,7 @@ impl Default for LpvArgs {
             no_lpv_snap: false,
             lpv_reemit: Reemit::Central,
             lpv_bounces: Bounces::Multiple,
+            no_lpv_near_occlusion: false,
             lpv_sky_lights: lightlab_gpu::lpv::DEFAULT_SKY_LIGHTS,
             debug_view: DebugView::Final,
         }
@@ -1302,6 +1307,7 @@ impl LpvArgs {
             snap: !self.no_lpv_snap,
             reemit: self.lpv_reemit,
             bounces: self.lpv_bounces,
+            near_occlusion: !self.no_lpv_near_occlusion,
             // The report lights its volume with the sun only (its sky is a composite term).
             sky_lights: if faithful { 0 } else { self.lpv_sky_lights },
             ..Default::default()

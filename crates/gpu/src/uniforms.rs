@@ -78,7 +78,9 @@ pub struct LpvAmbientUniforms {
     pub indirect_only: u32,
     pub damping: f32,
     pub cascades: u32,
-    pub pad0: u32,
+    /// Sub-cell occlusion of the volume's light: the radius [m] within which the sky's depth
+    /// maps count a surface as occluding (0: off).
+    pub occlusion_radius: f32,
     pub pad1: u32,
     pub pad2: u32,
     pub grids: [[f32; 4]; 4],
@@ -248,7 +250,7 @@ mod tests {
                     indirect_only,
                     damping,
                     cascades,
-                    pad0,
+                    occlusion_radius,
                     pad1,
                     pad2,
                     grids,

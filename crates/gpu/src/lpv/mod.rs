@@ -93,6 +93,10 @@ pub struct LpvSettings {
     /// reflected × the blocking surfaces' albedo (`Multiple`, the default; Kaplanyan only,
     /// with `occlusion`; see `lightlab_core::lpv::Bounces`).
     pub bounces: lpv::Bounces,
+    /// Darken the volume's light by the occlusion nearer than its lookup reaches (0.5 +
+    /// `damping` cells of the scene's grid), read from the sky's depth maps (Kaplanyan only;
+    /// needs an environment, so none on cornell). See [`Lpv::near_occlusion_radius`].
+    pub near_occlusion: bool,
     /// The sky's light injected as this many directional RSM views (the environment split into
     /// cells, `raster::ambient::sky::sky_lights`), so that the volume carries the bounce of sky
     /// light, occluded as the sun's is; 0 = none (the sky then lights only directly).
@@ -129,6 +133,7 @@ impl Default for LpvSettings {
             anchor: None,
             reemit: lpv::Reemit::Central,
             bounces: lpv::Bounces::Multiple,
+            near_occlusion: true,
             sky_lights: DEFAULT_SKY_LIGHTS,
         }
     }
@@ -666,6 +671,21 @@ impl Lpv {
             uniform_bytes,
             textures,
         })
+    }
+
+    /// The radius [m] within which surfaces occlude the volume's light at a lookup (0: off).
+    /// A lookup reads the volume half a cell out along the normal and, with damping, `damping`
+    /// cells further: a surface nearer than that is below what the volume resolves, and the
+    /// light the volume holds there arrives around it. The ambient pass counts, over the sky's
+    /// shadow-mapped directions (cosine and solid-angle weighted), those whose first surface
+    /// lies within this radius, and keeps 1 − that share of the volume's light (Crytek paired
+    /// their volumes with screen-space occlusion of about a cell for the same reason).
+    pub fn near_occlusion_radius(&self) -> f32 {
+        if !self.settings.near_occlusion || self.settings.scheme != LpvScheme::Kaplanyan {
+            return 0.0;
+        }
+        let cell = self.grids.last().map_or(0.0, |g| g.cell);
+        (0.5 + self.settings.damping.max(0.0)) * cell
     }
 
     /// GPU memory of the volumes and the RSM [bytes]: per cascade the fixed-point injection

@@ -171,6 +171,9 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     if s.transmission > 0.0 {
         e = (1.0 - s.transmission) * e + s.transmission * lpv_irradiance(s.p, -s.n);
     }
+    if lpv_u.occlusion_radius > 0.0 {
+        e *= 1.0 - sky_near_occlusion(s, lpv_u.occlusion_radius);
+    }
     let indirect = s.diffuse / PI * e;
     if lpv_u.indirect_only == 1u {
         return indirect;

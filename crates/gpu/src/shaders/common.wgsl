@@ -69,7 +69,9 @@ struct LpvAmbientUniforms {
     indirect_only: u32,
     damping: f32,
     cascades: u32,
-    pad0: u32,
+    // Sub-cell occlusion of the volume's light: the radius [m] within which the sky's depth maps
+    // count a surface as occluding (0: off).
+    occlusion_radius: f32,
     pad1: u32,
     pad2: u32,
     grids: array<vec4<f32>, 4>,

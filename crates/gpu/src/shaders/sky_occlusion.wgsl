@@ -2,8 +2,9 @@
 // the fraction of the environment's diffuse light that reaches a point, from shadow-mapped sky
 // directions. Compiled after raster.wgsl, before the source's own WGSL; group 2, bindings 8–10.
 
-// One sky direction: its orthographic view-projection, the unit direction towards the sky and
-// its cell: the flux-weighted mean direction (xyz) and the luminance of E⊥ = Σ L·ΔΩ (w).
+// One sky direction: its orthographic view-projection, the unit direction towards the sky
+// (xyz) with its cell's solid angle (w), and its cell: the flux-weighted mean direction (xyz)
+// and the luminance of E⊥ = Σ L·ΔΩ (w).
 struct SkyDir {
     view_proj: mat4x4<f32>,
     dir: vec4<f32>,
@@ -48,4 +49,37 @@ fn sky_visibility(s: Surface) -> f32 {
         }
     }
     return select(1.0, seen / max(all, 1e-8), count > 0u && all > 0.0);
+}
+
+// The share of the hemisphere around n (cosine-weighted, each direction by its cell's solid
+// angle, dir.w) in which the first surface seen from the sky along ω_k lies between p and the
+// sky within `radius` of p: occlusion closer than the light volume's cells, which the volume
+// cannot resolve. 0 without directions.
+fn sky_near_occlusion(s: Surface, radius: f32) -> f32 {
+    let count = u32(sky.header.x);
+    let texel = sky.header.y;
+    let range = 3.0 * sky.header.z;
+    let size = vec2<f32>(textureDimensions(sky_depth));
+    var all = 0.0;
+    var near = 0.0;
+    for (var k = 0u; k < count; k++) {
+        let d = sky.dirs[k].dir;
+        let w = d.w * dot(s.n, d.xyz);
+        if w <= 0.0 {
+            continue;
+        }
+        all += w;
+        let q = s.p + s.ng * (2.0 * texel);
+        let clip = sky.dirs[k].view_proj * vec4<f32>(q, 1.0);
+        let uv = vec2<f32>(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
+        if any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0)) {
+            continue;
+        }
+        let zb = textureLoad(sky_depth, vec2<i32>(uv * size), i32(k), 0);
+        let gap = (clip.z - zb) * range;
+        if gap > texel && gap < radius {
+            near += w;
+        }
+    }
+    return select(0.0, near / max(all, 1e-8), count > 0u && all > 0.0);
 }

@@ -43,6 +43,7 @@ impl LpvSource {
                 LpvScheme::Wpi => 0.0,
             },
             cascades: volume.grids.len() as u32,
+            occlusion_radius: volume.near_occlusion_radius(),
             grids: [[0.0, 0.0, 0.0, 1.0]; 4],
             ..Default::default()
         };

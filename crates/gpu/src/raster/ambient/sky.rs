@@ -35,7 +35,8 @@ const DARK_FLOOR: f64 = 0.1;
 /// Side of each direction's depth map.
 const MAP_SIZE: u32 = 256;
 
-/// Per direction (WGSL `SkyDir`): its view-projection, the unit direction towards the sky, and
+/// Per direction (WGSL `SkyDir`): its view-projection, the unit direction towards the sky (xyz)
+/// with its cell's solid angle (w), and
 /// its cell: the flux-weighted mean direction (xyz) and the luminance of E⊥ = Σ L·ΔΩ (w). A
 /// surface's weight for the cell is w·⟨n, mean⟩₊, the cell's irradiance as one small source.
 /// (Nine SH coefficients per cell, as before, smeared each cell's clamped cosine: 8 % too weak
@@ -147,6 +148,18 @@ pub fn sky_cells(env: &Image, scale: f32, dirs: &[Vec3]) -> Vec<(Vec3, Vec3)> {
         .collect()
 }
 
+/// The solid angle of each direction's cell (each texel of the lat-long `env` to its nearest
+/// direction); they sum to 4π.
+pub fn cell_solid_angles(env: &Image, dirs: &[Vec3]) -> Vec<f32> {
+    let mut omega = vec![0.0f64; dirs.len()];
+    if !dirs.is_empty() {
+        for_each_texel(env, EnvFormat::LatLong, |d, o, _| {
+            omega[nearest(dirs, d.as_vec3())] += o
+        });
+    }
+    omega.into_iter().map(|o| o as f32).collect()
+}
+
 /// The environment (lat-long, × `scale`) as up to `n` directional lights, for the LPV's
 /// injection of sky light (issue 22): the sphere split into the cells of `n` spherical Fibonacci
 /// directions (each texel to its nearest), each cell a light from its flux-weighted mean
@@ -192,13 +205,14 @@ impl SkyOcclusion {
             None => vec![],
         };
         let cells = env.map_or(vec![], |(img, s)| sky_cells(img, s, &dirs));
-        let data: Vec<SkyDir> = dirs
+        let omega = env.map_or(vec![], |(img, _)| cell_solid_angles(img, &dirs));
+        let data: Vec<SkyDir> = omega
             .iter()
             .zip(&cells)
-            .map(|(_, cell)| SkyDir {
+            .map(|(&omega, cell)| SkyDir {
                 // Seen along the cell's mean direction, the one its weight is computed for.
                 view_proj: view_proj(cell.0, centre, radius).to_cols_array_2d(),
-                dir: cell.0.extend(0.0).to_array(),
+                dir: cell.0.extend(omega).to_array(),
                 cell: cell.0.extend(cell.1.dot(LUMINANCE)).to_array(),
             })
             .collect();
@@ -427,6 +441,16 @@ mod tests {
         );
         let flat = Image::from_fn(128, 64, |_, _| Vec3::ONE);
         let cells = sky_cells(&flat, 1.0, &dirs);
+        // The cells' solid angles sum to 4π, about 4π/64 each for evenly spread directions.
+        let omega = cell_solid_angles(&flat, &dirs);
+        let four_pi = 4.0 * std::f32::consts::PI;
+        assert!((omega.iter().sum::<f32>() - four_pi).abs() < 1e-3);
+        assert!(
+            omega
+                .iter()
+                .all(|o| (o - four_pi / 64.0).abs() < 0.25 * four_pi / 64.0)
+        );
+        assert!(cell_solid_angles(&flat, &[]).is_empty());
         for n in fibonacci_directions(40) {
             let e = irradiance(&cells, n).x;
             assert!(
