@@ -171,15 +171,14 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     if s.transmission > 0.0 {
         e = (1.0 - s.transmission) * e + s.transmission * lpv_irradiance(s.p, -s.n);
     }
-    if lpv_u.occlusion_radius > 0.0 {
-        e *= 1.0 - sky_near_occlusion(s, lpv_u.occlusion_radius);
+    if lpv_u.mode == 2u && lpv_u.sun_dir.w > 0.5 && lpv_u.indirect_only == 0u {
+        return wpi_composite(s) + emission(in);
     }
-    let indirect = s.diffuse / PI * e;
+    // The sky's visibility and the near occlusion of the volume's light, in one pass.
+    let sky_t = sky_terms(s, lpv_u.occlusion_radius);
+    let indirect = s.diffuse / PI * e * (1.0 - sky_t.y);
     if lpv_u.indirect_only == 1u {
         return indirect;
     }
-    if lpv_u.mode == 2u && lpv_u.sun_dir.w > 0.5 {
-        return wpi_composite(s) + emission(in);
-    }
-    return indirect + sky_ambient(s) * sky_visibility(s) + emission(in);
+    return indirect + sky_ambient(s) * sky_t.x + emission(in);
 }

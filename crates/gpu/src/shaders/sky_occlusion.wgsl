@@ -21,65 +21,63 @@ struct SkyOcclusion {
 @group(2) @binding(9) var sky_cmp: sampler_comparison;
 @group(2) @binding(10) var<storage, read> sky: SkyOcclusion;
 
-// Whether p (geometric normal ng) sees the sky along direction k: one bilinear depth
-// comparison (2 × 2 texels), the point moved off the surface by two texels along ng.
-fn sky_visible(k: u32, p: vec3<f32>, ng: vec3<f32>) -> f32 {
-    let texel = sky.header.y;
-    let q = p + ng * (2.0 * texel);
-    let clip = sky.dirs[k].view_proj * vec4<f32>(q, 1.0);
-    let uv = vec2<f32>(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
-    // One texel's depth in the map's 0..1 range (over 3 radii), as a bias.
-    let z = clip.z - texel / (3.0 * sky.header.z);
-    return textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), z);
-}
-
-// The fraction of the sky's irradiance at n that reaches p: Σ V_k E_k(n) / Σ E_k(n) by
-// luminance, E_k(n) = E⊥_k ⟨n, ω_k⟩₊ the cell as a small source (1 without occlusion).
-// Directions whose cell does not light n are not sampled.
-fn sky_visibility(s: Surface) -> f32 {
-    let count = u32(sky.header.x);
-    var all = 0.0;
-    var seen = 0.0;
-    for (var k = 0u; k < count; k++) {
-        let c = sky.dirs[k].cell;
-        let w = c.w * dot(s.n, c.xyz);
-        if w > 0.0 {
-            all += w;
-            seen += w * sky_visible(k, s.p, s.ng);
-        }
-    }
-    return select(1.0, seen / max(all, 1e-8), count > 0u && all > 0.0);
-}
-
-// The share of the hemisphere around n (cosine-weighted, each direction by its cell's solid
+// The fraction of the sky's irradiance at n that reaches p (x) and, when `radius` > 0, the
+// near occlusion within `radius` (y), in one pass over the directions (they share each
+// direction's projection).
+//
+// x: Σ V_k E_k(n) / Σ E_k(n) by luminance, E_k(n) = E⊥_k ⟨n, ω_k⟩₊ the cell as a small source,
+// V_k one bilinear depth comparison (2 × 2 texels) with the point moved off the surface by two
+// texels along ng; 1 without occlusion. Directions whose cell does not light n are not
+// sampled for it.
+//
+// y: the share of the hemisphere around n (cosine-weighted, each direction by its cell's solid
 // angle, dir.w) in which the first surface seen from the sky along ω_k lies between p and the
 // sky within `radius` of p: occlusion closer than the light volume's cells, which the volume
-// cannot resolve. 0 without directions.
-fn sky_near_occlusion(s: Surface, radius: f32) -> f32 {
+// cannot resolve; 0 without directions.
+fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
     let count = u32(sky.header.x);
     let texel = sky.header.y;
     let range = 3.0 * sky.header.z;
     let size = vec2<f32>(textureDimensions(sky_depth));
-    var all = 0.0;
+    let q = vec4<f32>(s.p + s.ng * (2.0 * texel), 1.0);
+    var lit = 0.0;
+    var seen = 0.0;
+    var area = 0.0;
     var near = 0.0;
     for (var k = 0u; k < count; k++) {
-        let d = sky.dirs[k].dir;
-        let w = d.w * dot(s.n, d.xyz);
-        if w <= 0.0 {
+        let d = sky.dirs[k];
+        let c = dot(s.n, d.cell.xyz);
+        let w = d.cell.w * c;
+        if c <= 0.0 || (w <= 0.0 && radius <= 0.0) {
             continue;
         }
-        all += w;
-        let q = s.p + s.ng * (2.0 * texel);
-        let clip = sky.dirs[k].view_proj * vec4<f32>(q, 1.0);
+        let clip = d.view_proj * q;
         let uv = vec2<f32>(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
-        if any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0)) {
-            continue;
+        if w > 0.0 {
+            lit += w;
+            // One texel's depth in the map's 0..1 range (over 3 radii), as a bias.
+            let z = clip.z - texel / range;
+            seen += w * textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), z);
         }
-        let zb = textureLoad(sky_depth, vec2<i32>(uv * size), i32(k), 0);
-        let gap = (clip.z - zb) * range;
-        if gap > texel && gap < radius {
-            near += w;
+        if radius > 0.0 {
+            let wo = d.dir.w * c;
+            area += wo;
+            if all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0)) {
+                let zb = textureLoad(sky_depth, vec2<i32>(uv * size), i32(k), 0);
+                let gap = (clip.z - zb) * range;
+                if gap > texel && gap < radius {
+                    near += wo;
+                }
+            }
         }
     }
-    return select(0.0, near / max(all, 1e-8), count > 0u && all > 0.0);
+    return vec2<f32>(
+        select(1.0, seen / max(lit, 1e-8), count > 0u && lit > 0.0),
+        select(0.0, near / max(area, 1e-8), area > 0.0),
+    );
+}
+
+// The fraction of the sky's irradiance at n that reaches p (`sky_terms`' x).
+fn sky_visibility(s: Surface) -> f32 {
+    return sky_terms(s, 0.0).x;
 }
