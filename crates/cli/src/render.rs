@@ -33,7 +33,7 @@ pub struct RenderArgs {
     /// the SH techniques `prt-vertex`, `prt-textured`, `prt-hierarchical`, `shl`,
     /// `shl-compressed`, `shl-normalmapped` (transfer × the scene's lights projected on SH);
     /// the light propagation volumes `lpv` and `lpv-faithful` (shadow-mapped direct light +
-    /// one bounce from the volume); the debug view `normals`. Every GPU technique draws planar
+    /// the volume's indirect light: `lpv` multiple bounces by default, `lpv-faithful` one); the debug view `normals`. Every GPU technique draws planar
     /// mirrors from the mirrored eye (`--planar-mirrors`). The light-map and SH techniques read
     /// `--baked DIR` or bake first.
     /// The sky's diffuse light: traced (reference, direct); SH irradiance occluded through

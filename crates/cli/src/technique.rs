@@ -59,8 +59,10 @@ impl Family {
             Family::Lightmap => "baked into the light-map, occluded and bounced by the bake",
             Family::Sh => "SH transfer: shadowed (and inter-reflected) by the bake",
             Family::Lpv => {
-                "SH irradiance occluded as the Phong techniques'; the volume adds the bounce of \
-                 the lights and of the sky (lpv: 16 directional views, --lpv-sky-lights)"
+                "SH irradiance occluded as the Phong techniques'; the volume adds the bounces of \
+                 the lights and of the sky (lpv: 16 directional views, --lpv-sky-lights; \
+                 multiple bounces, --lpv-bounces), darkened by occluders nearer than its cells \
+                 (lpv: --no-lpv-near-occlusion)"
             }
             Family::Debug => "none",
         }

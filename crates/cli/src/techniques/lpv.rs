@@ -1,6 +1,7 @@
 //! The light-propagation-volume techniques `lpv` (Kaplanyan & Dachsbacher 2010) and
 //! `lpv-faithful` (the WPI 2011 report's scheme): direct light with shadow maps, the
-//! environment's SH ambient, and one bounce of indirect light from the volume, recomputed every
+//! environment's SH ambient, and the volume's indirect light (`lpv`: multiple bounces through
+//! the geometry volume by default; `lpv-faithful`: one), recomputed every
 //! frame; and the layers of `--debug-view`.
 
 use super::Request;
