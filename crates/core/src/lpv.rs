@@ -814,11 +814,8 @@ mod tests {
         assert!(v.at(IVec3::new(1, 1, 1))[0][0] > 0.0);
     }
 
-    #[test]
-    fn a_wall_of_blockers_stops_light() {
-        // A plane of surfels at x = 5 facing −x fills the geometry cells there; light
-        // travelling +x from x < 5 is stopped, light behind the plane is not affected.
-        let g = grid(10);
+    /// A plane of surfels of `albedo` at x = 5 facing −x, covering the 10-cell grid's face.
+    fn wall_at_x5(albedo: Vec3) -> Vec<Surfel> {
         let mut surfels = Vec::new();
         for y in 0..40 {
             for z in 0..40 {
@@ -826,11 +823,19 @@ mod tests {
                     position: Vec3::new(5.0, y as f32 * 0.25, z as f32 * 0.25),
                     normal: -Vec3::X,
                     area: 0.0625,
-                    albedo: Vec3::splat(0.5),
+                    albedo,
                 });
             }
         }
-        let occ = Occlusion::inject(g, &surfels);
+        surfels
+    }
+
+    #[test]
+    fn a_wall_of_blockers_stops_light() {
+        // A plane of surfels at x = 5 facing −x fills the geometry cells there; light
+        // travelling +x from x < 5 is stopped, light behind the plane is not affected.
+        let g = grid(10);
+        let occ = Occlusion::inject(g, &wall_at_x5(Vec3::splat(0.5)));
         let c = IVec3::new(4, 5, 5);
         let t_in = occ.transmittance(c, IVec3::X, Vec3::X);
         assert!(t_in < 0.05, "{t_in}");
@@ -850,18 +855,7 @@ mod tests {
     #[test]
     fn a_wall_reflects_what_it_blocks_times_its_albedo() {
         let g = grid(10);
-        let mut surfels = Vec::new();
-        for y in 0..40 {
-            for z in 0..40 {
-                surfels.push(Surfel {
-                    position: Vec3::new(5.0, y as f32 * 0.25, z as f32 * 0.25),
-                    normal: -Vec3::X,
-                    area: 0.0625,
-                    albedo: Vec3::new(0.5, 0.25, 0.0),
-                });
-            }
-        }
-        let occ = Occlusion::inject(g, &surfels);
+        let occ = Occlusion::inject(g, &wall_at_x5(Vec3::new(0.5, 0.25, 0.0)));
         let c = IVec3::new(4, 5, 5);
         assert!((occ.face_albedo(c, IVec3::X) - Vec3::new(0.5, 0.25, 0.0)).length() < 1e-5);
         assert_eq!(occ.face_albedo(IVec3::new(2, 5, 5), IVec3::X), Vec3::ZERO);
