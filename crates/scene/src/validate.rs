@@ -37,98 +37,114 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
         a.check(scene.instances.len())
             .map_err(|problem| content("animation".into(), problem))?;
     }
-    let nmat = scene.materials.len();
     let nmesh = scene.meshes.len();
-    for (k, mesh) in scene.meshes.iter_mut().enumerate() {
-        let n = mesh.positions.len();
-        let name = mesh.name.clone();
-        if mesh.detail_source.is_some_and(|d| d >= nmesh || d == k) {
-            return Err(geo(
-                &name,
-                "its detail source is itself or a mesh that does not exist".into(),
-            ));
-        }
-        if mesh.indices.len() % 3 != 0 {
-            return Err(geo(
-                &name,
-                format!("{} indices is not a multiple of 3", mesh.indices.len()),
-            ));
-        }
-        if mesh.indices.is_empty() {
-            return Err(geo(&name, "has no triangles".into()));
-        }
-        if let Some(bad) = mesh.indices.iter().find(|&&i| i as usize >= n) {
-            return Err(geo(
-                &name,
-                format!("index {bad} out of range ({n} vertices)"),
-            ));
-        }
-        if mesh.material >= nmat {
-            return Err(geo(
-                &name,
-                "references a material that does not exist".into(),
-            ));
-        }
-        if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
-            return Err(geo(
-                &name,
-                format!("vertex {i} has a NaN or infinite position"),
-            ));
-        }
-        let uv_needed = scene.materials[mesh.material].reads_uv_set(0);
-        if mesh.uv0.is_empty() {
-            if uv_needed {
-                return Err(geo(
-                    &name,
-                    "has no TEXCOORD_0 but its material is textured".into(),
-                ));
-            }
-            mesh.uv0 = vec![glam::Vec2::ZERO; n];
-        }
-        if mesh.uv0.len() != n {
-            return Err(geo(&name, "TEXCOORD_0 length differs from POSITION".into()));
-        }
-        if mesh.uv0.iter().any(|u| !u.is_finite()) {
-            return Err(geo(&name, "TEXCOORD_0 has NaN or infinite values".into()));
-        }
-        let uv1_needed = scene.materials[mesh.material].reads_uv_set(1);
-        if uv1_needed && mesh.uv1.is_none() {
-            return Err(geo(
-                &name,
-                "has no TEXCOORD_1 but a texture of its material reads it".into(),
-            ));
-        }
-        if let Some(uv1) = &mesh.uv1
-            && (uv1.len() != n || uv1.iter().any(|u| !u.is_finite()))
-        {
-            return Err(geo(
-                &name,
-                "TEXCOORD_1 is inconsistent or not finite".into(),
-            ));
-        }
-        if !mesh.colors.is_empty()
-            && (mesh.colors.len() != n || mesh.colors.iter().any(|c| !c.is_finite()))
-        {
-            return Err(geo(&name, "COLOR_0 is inconsistent or not finite".into()));
-        }
-        if let Some(warning) = drop_degenerate(mesh, opts.strict).map_err(|e| geo(&name, e))? {
-            scene.warnings.push(warning);
-        }
-        if mesh.normals.is_empty() {
-            mesh.compute_normals();
-        }
-        if mesh.normals.len() != n {
-            return Err(geo(&name, "NORMAL length differs from POSITION".into()));
-        }
-        if mesh.normals.iter().any(|v| !v.is_finite()) {
-            return Err(geo(&name, "NORMAL has NaN or infinite values".into()));
-        }
-        repair_normals(mesh);
-        if mesh.tangents.len() != n || mesh.tangents.iter().any(|t| !t.is_finite()) {
-            mesh.compute_tangents();
-        }
+    for k in 0..nmesh {
+        let name = scene.meshes[k].name.clone();
+        let warning = check_mesh(scene, k, opts.strict).map_err(|problem| geo(&name, problem))?;
+        scene.warnings.extend(warning);
     }
     check_instances(scene, path)?;
+    check_lights(scene, path)?;
+    for c in &scene.cameras {
+        if !(c.yfov > 0.0 && c.yfov < std::f32::consts::PI && c.transform.is_finite()) {
+            return Err(content(
+                format!("camera '{}'", c.name),
+                "field of view or transform invalid".into(),
+            ));
+        }
+    }
+    if let Some(env) = &scene.environment {
+        env.check()
+            .map_err(|m| content("extras.lightlab.environment".into(), m))?;
+    }
+    if scene.instances.is_empty() {
+        return Err(content(
+            "scene".into(),
+            "contains no triangle meshes".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Check mesh `k` of `scene` (and repair what may be: missing UVs, normals and tangents,
+/// degenerate triangles); the problem, or a warning about what was dropped.
+fn check_mesh(scene: &mut Scene, k: usize, strict: bool) -> Result<Option<String>, String> {
+    let nmesh = scene.meshes.len();
+    let (meshes, materials) = (&mut scene.meshes, &scene.materials);
+    let mesh = &mut meshes[k];
+    let n = mesh.positions.len();
+    if mesh.detail_source.is_some_and(|d| d >= nmesh || d == k) {
+        return Err("its detail source is itself or a mesh that does not exist".into());
+    }
+    if mesh.indices.len() % 3 != 0 {
+        return Err(format!(
+            "{} indices is not a multiple of 3",
+            mesh.indices.len()
+        ));
+    }
+    if mesh.indices.is_empty() {
+        return Err("has no triangles".into());
+    }
+    if let Some(bad) = mesh.indices.iter().find(|&&i| i as usize >= n) {
+        return Err(format!("index {bad} out of range ({n} vertices)"));
+    }
+    if mesh.material >= materials.len() {
+        return Err("references a material that does not exist".into());
+    }
+    if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        return Err(format!("vertex {i} has a NaN or infinite position"));
+    }
+    let uv_needed = materials[mesh.material].reads_uv_set(0);
+    if mesh.uv0.is_empty() {
+        if uv_needed {
+            return Err("has no TEXCOORD_0 but its material is textured".into());
+        }
+        mesh.uv0 = vec![glam::Vec2::ZERO; n];
+    }
+    if mesh.uv0.len() != n {
+        return Err("TEXCOORD_0 length differs from POSITION".into());
+    }
+    if mesh.uv0.iter().any(|u| !u.is_finite()) {
+        return Err("TEXCOORD_0 has NaN or infinite values".into());
+    }
+    let uv1_needed = materials[mesh.material].reads_uv_set(1);
+    if uv1_needed && mesh.uv1.is_none() {
+        return Err("has no TEXCOORD_1 but a texture of its material reads it".into());
+    }
+    if let Some(uv1) = &mesh.uv1
+        && (uv1.len() != n || uv1.iter().any(|u| !u.is_finite()))
+    {
+        return Err("TEXCOORD_1 is inconsistent or not finite".into());
+    }
+    if !mesh.colors.is_empty()
+        && (mesh.colors.len() != n || mesh.colors.iter().any(|c| !c.is_finite()))
+    {
+        return Err("COLOR_0 is inconsistent or not finite".into());
+    }
+    let warning = drop_degenerate(mesh, strict)?;
+    if mesh.normals.is_empty() {
+        mesh.compute_normals();
+    }
+    if mesh.normals.len() != n {
+        return Err("NORMAL length differs from POSITION".into());
+    }
+    if mesh.normals.iter().any(|v| !v.is_finite()) {
+        return Err("NORMAL has NaN or infinite values".into());
+    }
+    repair_normals(mesh);
+    if mesh.tangents.len() != n || mesh.tangents.iter().any(|t| !t.is_finite()) {
+        mesh.compute_tangents();
+    }
+    Ok(warning)
+}
+
+/// Light parameters: finite, non-negative, cones and angles in range.
+fn check_lights(scene: &Scene, path: &Path) -> Result<(), SceneError> {
+    let content = |what: String, problem: String| SceneError::Content {
+        path: path.into(),
+        what,
+        problem,
+    };
     for l in &scene.lights {
         let what = format!("light '{}'", l.name);
         if !l.color.is_finite()
@@ -178,24 +194,6 @@ pub fn validate(scene: &mut Scene, path: &Path, opts: LoadOptions) -> Result<(),
                     .into(),
             ));
         }
-    }
-    for c in &scene.cameras {
-        if !(c.yfov > 0.0 && c.yfov < std::f32::consts::PI && c.transform.is_finite()) {
-            return Err(content(
-                format!("camera '{}'", c.name),
-                "field of view or transform invalid".into(),
-            ));
-        }
-    }
-    if let Some(env) = &scene.environment {
-        env.check()
-            .map_err(|m| content("extras.lightlab.environment".into(), m))?;
-    }
-    if scene.instances.is_empty() {
-        return Err(content(
-            "scene".into(),
-            "contains no triangle meshes".into(),
-        ));
     }
     Ok(())
 }
