@@ -769,24 +769,6 @@ impl Importer<'_> {
                 Some(tref(tex, tex_coord as u32, transform, false)?)
             }
         };
-        let sway = extras_json(m.extras())
-            .and_then(|v| v.get("lightlab")?.get("sway")?.as_f64())
-            .unwrap_or(0.0) as f32;
-        let brdf = match extras_json(m.extras())
-            .and_then(|v| v.get("lightlab")?.get("brdf")?.as_str().map(str::to_owned))
-        {
-            None => BrdfModel::Pbr,
-            Some(name) => BrdfModel::parse(&name).ok_or_else(|| {
-                gltf_err(
-                    self.path,
-                    format!(
-                        "material '{}': unknown extras.lightlab.brdf '{name}' (known: {})",
-                        m.name().unwrap_or("material"),
-                        BrdfModel::NAMES.join(", ")
-                    ),
-                )
-            })?,
-        };
         let aniso = m.extension_value("KHR_materials_anisotropy");
         let aniso_f = |k: &str| {
             aniso
@@ -800,30 +782,7 @@ impl Importer<'_> {
                 m.name().unwrap_or("material")
             ));
         }
-        let lafortune = match extras_json(m.extras())
-            .and_then(|v| v.get("lightlab")?.get("lafortune").cloned())
-        {
-            None => Vec3::new(-1.0, -1.0, 1.0),
-            Some(v) => vec3_of(&v).ok_or_else(|| {
-                gltf_err(
-                    self.path,
-                    format!(
-                        "material '{}': extras.lightlab.lafortune must be three finite numbers \
-                         [Cx, Cy, Cz]",
-                        m.name().unwrap_or("material")
-                    ),
-                )
-            })?,
-        };
-        let conductor = conductor_extras(m).map_err(|e| {
-            gltf_err(
-                self.path,
-                format!(
-                    "material '{}': extras.lightlab.conductor {e}",
-                    m.name().unwrap_or("material")
-                ),
-            )
-        })?;
+        let x = material_extras(m, self.path)?;
         Ok(Material {
             name: m.name().unwrap_or("material").into(),
             base_color: Vec4::from_array(pbr.base_color_factor()),
@@ -847,8 +806,8 @@ impl Importer<'_> {
             double_sided: m.double_sided(),
             transmission,
             transmission_texture,
-            sway,
-            brdf,
+            sway: x.sway,
+            brdf: x.brdf,
             specular_transmission: m
                 .transmission()
                 .map_or(0.0, |t| t.transmission_factor().clamp(0.0, 1.0)),
@@ -856,7 +815,7 @@ impl Importer<'_> {
                 .ior()
                 .filter(|n| n.is_finite() && *n >= 1.0)
                 .unwrap_or(1.5),
-            conductor,
+            conductor: x.conductor,
             thickness: m
                 .extension_value("KHR_materials_volume")
                 .and_then(|v| v.get("thicknessFactor")?.as_f64())
@@ -864,7 +823,7 @@ impl Importer<'_> {
                 .unwrap_or(0.0) as f32,
             anisotropy: aniso_f("anisotropyStrength").unwrap_or(0.0).clamp(0.0, 1.0) as f32,
             anisotropy_rotation: aniso_f("anisotropyRotation").unwrap_or(0.0) as f32,
-            lafortune,
+            lafortune: x.lafortune,
         })
     }
 
@@ -1398,6 +1357,57 @@ fn vec3_of(v: &Value) -> Option<Vec3> {
         .map(|x| x as f32)
         .collect();
     (x.len() == 3 && x.iter().all(|x| x.is_finite())).then(|| Vec3::new(x[0], x[1], x[2]))
+}
+
+/// A material's `extras.lightlab` settings (wind sway, BRDF model, Lafortune lobe, conductor).
+struct MaterialExtras {
+    sway: f32,
+    brdf: BrdfModel,
+    lafortune: Vec3,
+    conductor: Option<Conductor>,
+}
+
+fn material_extras(m: &gltf::Material, path: &Path) -> Result<MaterialExtras, SceneError> {
+    let name = m.name().unwrap_or("material");
+    let lightlab = extras_json(m.extras()).and_then(|v| v.get("lightlab").cloned());
+    let get = |key: &str| lightlab.as_ref().and_then(|v| v.get(key));
+    let sway = get("sway").and_then(|v| v.as_f64()).unwrap_or(0.0) as f32;
+    let brdf = match get("brdf").and_then(|v| v.as_str()) {
+        None => BrdfModel::Pbr,
+        Some(b) => BrdfModel::parse(b).ok_or_else(|| {
+            gltf_err(
+                path,
+                format!(
+                    "material '{name}': unknown extras.lightlab.brdf '{b}' (known: {})",
+                    BrdfModel::NAMES.join(", ")
+                ),
+            )
+        })?,
+    };
+    let lafortune = match get("lafortune") {
+        None => Vec3::new(-1.0, -1.0, 1.0),
+        Some(v) => vec3_of(v).ok_or_else(|| {
+            gltf_err(
+                path,
+                format!(
+                    "material '{name}': extras.lightlab.lafortune must be three finite numbers \
+                     [Cx, Cy, Cz]"
+                ),
+            )
+        })?,
+    };
+    let conductor = conductor_extras(m).map_err(|e| {
+        gltf_err(
+            path,
+            format!("material '{name}': extras.lightlab.conductor {e}"),
+        )
+    })?;
+    Ok(MaterialExtras {
+        sway,
+        brdf,
+        lafortune,
+        conductor,
+    })
 }
 
 /// `extras.lightlab.conductor` of a material: a preset name or `{"eta": [r,g,b], "k": [r,g,b]}`
