@@ -394,73 +394,20 @@ impl Renderer {
         mirrored: bool,
     ) -> Result<Renderer, RasterError> {
         let s = &settings;
-        if let AmbientInput::Lightmap(lm) = ambient
-            && !super::ambient::lightmap_fits(lm, scene)
-        {
-            return Err(RasterError::Settings(
-                "light-maps do not match the scene (one rect per instance, non-empty pages)".into(),
-            ));
-        }
-        if let AmbientInput::Sh(sh) = ambient {
-            sh.validate(scene)?;
-        }
-        s.validate()?;
-        let max = ctx.device.limits().max_texture_dimension_2d;
-        if s.width.max(s.height) > max || s.shadow_size > max {
-            return Err(RasterError::Settings(format!(
-                "a {}×{} frame (after supersampling) with {}² shadow maps exceeds the adapter's \
-                 largest texture, {max}²: lower --width/--height, --ssaa or --shadow-size",
-                s.width, s.height, s.shadow_size
-            )));
-        }
-        let camera = scene
-            .cameras
-            .get(s.camera)
-            .cloned()
-            .or_else(|| (s.camera == 0).then(|| scene.framing_camera()).flatten())
-            .ok_or(RasterError::NoCamera(s.camera))?;
+        let camera = checked_camera(ctx, scene, s, ambient)?;
         let device = &ctx.device;
         let (page_size, rects) = page_layout(ambient.lightmap(), ambient.sh());
         let gscene = GpuScene::with_lightmap_uvs(device, &ctx.queue, scene, rects.as_deref());
         let sun = (s.env_sun && matches!(ambient, AmbientInput::None | AmbientInput::Lpv(..)))
             .then(|| environment_sun(scene, s.ambient))
             .flatten();
-        let source = match ambient {
-            AmbientInput::None => AmbientSource::Sky(Box::new(sky_occlusion(
-                ctx,
-                scene,
-                s,
-                &gscene,
-                sun.as_ref().map(|(_, e)| e),
-            ))),
-            AmbientInput::Normals => AmbientSource::Normals,
-            AmbientInput::Lightmap(lm) => AmbientSource::lightmap(ctx, lm, page_size),
-            AmbientInput::Sh(sh) => AmbientSource::sh(ctx, sh, scene.instances.len(), page_size),
-            AmbientInput::Lpv(l, indirect_only) => {
-                // The volume's three textures beside the sky occlusion's depth maps.
-                let have = ctx.device.limits().max_sampled_textures_per_shader_stage;
-                if have < LPV_SAMPLED_TEXTURES {
-                    return Err(RasterError::Settings(format!(
-                        "the LPV techniques read {LPV_SAMPLED_TEXTURES} textures in one shader \
-                         stage; this adapter ({}) allows {have}",
-                        ctx.info.name
-                    )));
-                }
-                let aspect = s.width as f32 / s.height as f32;
-                let sun_light = sun.as_ref().map(|(l, _)| l);
-                let sky_lights = sky_radiance(scene, s, sun.as_ref().map(|(_, e)| e))
-                    .map_or(vec![], |(img, k)| {
-                        super::ambient::sky_lights(&img, k, l.sky_lights)
-                    });
-                let env = crate::lpv::EnvLights {
-                    sun: sun_light,
-                    sky: &sky_lights,
-                };
-                let v = Lpv::new(ctx, scene, env, l.clone(), &camera, aspect, &s.wind)?;
-                let sky = sky_occlusion(ctx, scene, s, &gscene, sun.as_ref().map(|(_, e)| e));
-                AmbientSource::lpv(ctx, v, sky, indirect_only)
-            }
+        let inputs = SourceInputs {
+            gscene: &gscene,
+            sun: sun.as_ref(),
+            camera: &camera,
+            page_size,
         };
+        let source = ambient_source(ctx, scene, s, ambient, &inputs)?;
         // A light-map holds the emitters' light already; SH transfer is lit by its SH light only.
         let area_lights =
             s.area_lights && matches!(ambient, AmbientInput::None | AmbientInput::Lpv(..));
@@ -514,18 +461,7 @@ impl Renderer {
         );
         let lighting = lighting_group(device, &layouts.lighting, &arrays, &source, &env);
         let g = groups(device, &layouts, &buffers, &targets, lighting);
-        let sky_group = scene
-            .environment
-            .as_ref()
-            .filter(|_| s.background)
-            .map(|env| {
-                let view = env_texture(ctx, env);
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("sky"),
-                    layout: &layouts.sky,
-                    entries: &[entry(5, R::TextureView(&view))],
-                })
-            });
+        let sky_group = background_group(ctx, scene, s, &layouts);
         let prepasses = source.prepass_count();
         let queries = queries(ctx, 5 + 2 * ls.lights.len() + ls.views.len() + prepasses);
         Ok(Renderer {
@@ -563,4 +499,122 @@ impl Renderer {
             clip_rect: None,
         })
     }
+}
+
+/// The settings and the ambient input checked against the scene and the adapter; the camera
+/// the renderer looks through (the scene's `s.camera`, or a framing one when it has none).
+fn checked_camera(
+    ctx: &GpuContext,
+    scene: &Scene,
+    s: &RasterSettings,
+    ambient: AmbientInput,
+) -> Result<Camera, RasterError> {
+    if let AmbientInput::Lightmap(lm) = ambient
+        && !super::ambient::lightmap_fits(lm, scene)
+    {
+        return Err(RasterError::Settings(
+            "light-maps do not match the scene (one rect per instance, non-empty pages)".into(),
+        ));
+    }
+    if let AmbientInput::Sh(sh) = ambient {
+        sh.validate(scene)?;
+    }
+    s.validate()?;
+    let max = ctx.device.limits().max_texture_dimension_2d;
+    if s.width.max(s.height) > max || s.shadow_size > max {
+        return Err(RasterError::Settings(format!(
+            "a {}×{} frame (after supersampling) with {}² shadow maps exceeds the adapter's \
+             largest texture, {max}²: lower --width/--height, --ssaa or --shadow-size",
+            s.width, s.height, s.shadow_size
+        )));
+    }
+    scene
+        .cameras
+        .get(s.camera)
+        .cloned()
+        .or_else(|| (s.camera == 0).then(|| scene.framing_camera()).flatten())
+        .ok_or(RasterError::NoCamera(s.camera))
+}
+
+/// What the ambient sources read besides the settings: the scene on the GPU, the sun taken out
+/// of the environment, the camera and the light-map or SH pages' size.
+struct SourceInputs<'a> {
+    gscene: &'a GpuScene,
+    sun: Option<&'a (lightlab_scene::Light, lightlab_core::sh_env::EnvSun)>,
+    camera: &'a Camera,
+    page_size: [u32; 2],
+}
+
+/// The ambient term's source: the occluded sky, the debug normals, a light-map, SH transfer or a
+/// light propagation volume (with the sky's occlusion beside it).
+fn ambient_source(
+    ctx: &GpuContext,
+    scene: &Scene,
+    s: &RasterSettings,
+    ambient: AmbientInput,
+    inputs: &SourceInputs,
+) -> Result<AmbientSource, RasterError> {
+    let SourceInputs {
+        gscene,
+        sun,
+        camera,
+        page_size,
+    } = *inputs;
+    Ok(match ambient {
+        AmbientInput::None => AmbientSource::Sky(Box::new(sky_occlusion(
+            ctx,
+            scene,
+            s,
+            gscene,
+            sun.map(|(_, e)| e),
+        ))),
+        AmbientInput::Normals => AmbientSource::Normals,
+        AmbientInput::Lightmap(lm) => AmbientSource::lightmap(ctx, lm, page_size),
+        AmbientInput::Sh(sh) => AmbientSource::sh(ctx, sh, scene.instances.len(), page_size),
+        AmbientInput::Lpv(l, indirect_only) => {
+            // The volume's three textures beside the sky occlusion's depth maps.
+            let have = ctx.device.limits().max_sampled_textures_per_shader_stage;
+            if have < LPV_SAMPLED_TEXTURES {
+                return Err(RasterError::Settings(format!(
+                    "the LPV techniques read {LPV_SAMPLED_TEXTURES} textures in one shader \
+                     stage; this adapter ({}) allows {have}",
+                    ctx.info.name
+                )));
+            }
+            let aspect = s.width as f32 / s.height as f32;
+            let sun_light = sun.map(|(l, _)| l);
+            let sky_lights = sky_radiance(scene, s, sun.map(|(_, e)| e))
+                .map_or(vec![], |(img, k)| {
+                    super::ambient::sky_lights(&img, k, l.sky_lights)
+                });
+            let env = crate::lpv::EnvLights {
+                sun: sun_light,
+                sky: &sky_lights,
+            };
+            let v = Lpv::new(ctx, scene, env, l.clone(), camera, aspect, &s.wind)?;
+            let sky = sky_occlusion(ctx, scene, s, gscene, sun.map(|(_, e)| e));
+            AmbientSource::lpv(ctx, v, sky, indirect_only)
+        }
+    })
+}
+
+/// The environment drawn as the background (with `s.background` and an environment).
+fn background_group(
+    ctx: &GpuContext,
+    scene: &Scene,
+    s: &RasterSettings,
+    layouts: &GroupLayouts,
+) -> Option<wgpu::BindGroup> {
+    scene
+        .environment
+        .as_ref()
+        .filter(|_| s.background)
+        .map(|env| {
+            let view = env_texture(ctx, env);
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("sky"),
+                layout: &layouts.sky,
+                entries: &[entry(5, R::TextureView(&view))],
+            })
+        })
 }
