@@ -251,16 +251,21 @@ struct Gfx {
     ctx: GpuContext,
     display: Display,
     egui: egui_winit::State,
-    egui_renderer: egui_wgpu::Renderer,
+    overlay: Overlay,
     renderer: Option<Renderer>,
     /// The camera lens's film, when the camera has a lens.
     lens: Option<lens::LensState>,
     /// An animated scene's player and the frame it last posed.
     animation: Option<(Box<dyn Animation>, Option<u32>)>,
+}
+
+/// The panel's renderer and the texture updates waiting for the next drawn frame.
+struct Overlay {
+    renderer: egui_wgpu::Renderer,
     pending: egui::TexturesDelta,
 }
 
-impl Drop for Gfx {
+impl Drop for Overlay {
     fn drop(&mut self) {
         // Updates of a frame that was never drawn are dropped with the window.
         self.pending.clear();
@@ -353,7 +358,10 @@ impl App<'_> {
             None,
             Some(ctx.device.limits().max_texture_dimension_2d as usize),
         );
-        let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, Default::default());
+        let overlay = Overlay {
+            renderer: egui_wgpu::Renderer::new(&ctx.device, format, Default::default()),
+            pending: Default::default(),
+        };
         self.stats.adapter = ctx.info.name.clone();
         self.stats.backend = format!("{:?}", ctx.info.backend);
         Ok(Gfx {
@@ -363,11 +371,10 @@ impl App<'_> {
             ctx,
             display,
             egui,
-            egui_renderer,
+            overlay,
             renderer: None,
             lens: None,
             animation: None,
-            pending: Default::default(),
         })
     }
 
@@ -501,7 +508,9 @@ impl App<'_> {
         gfx.egui
             .handle_platform_output(&gfx.window, std::mem::take(&mut full.platform_output));
         // Texture updates wait in `pending` until a frame is actually drawn.
-        gfx.pending.append(std::mem::take(&mut full.textures_delta));
+        gfx.overlay
+            .pending
+            .append(std::mem::take(&mut full.textures_delta));
         if c.technique != self.technique {
             self.technique = c.technique;
             self.rebuild = true;
@@ -548,48 +557,10 @@ impl App<'_> {
             self.exposure * scale,
             self.tone,
         );
-        let ppp = full.pixels_per_point;
-        let prims = gfx.egui.egui_ctx().tessellate(full.shapes, ppp);
-        let screen = egui_wgpu::ScreenDescriptor {
-            size_in_pixels: [w, h],
-            pixels_per_point: ppp,
-        };
-        for (id, deltas) in gfx.pending.set.drain() {
-            for delta in deltas {
-                gfx.egui_renderer
-                    .update_texture(&gfx.ctx.device, &gfx.ctx.queue, id, &delta);
-            }
-        }
-        let extra = gfx.egui_renderer.update_buffers(
-            &gfx.ctx.device,
-            &gfx.ctx.queue,
-            &mut enc,
-            &prims,
-            &screen,
-        );
-        {
-            let pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("egui"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            gfx.egui_renderer
-                .render(&mut pass.forget_lifetime(), &prims, &screen);
-        }
-        for id in gfx.pending.free.drain() {
-            gfx.egui_renderer.free_texture(&id);
-        }
+        let egui_ctx = gfx.egui.egui_ctx();
+        let extra = gfx
+            .overlay
+            .draw(&gfx.ctx, egui_ctx, &mut enc, &view, full, [w, h]);
         gfx.ctx
             .queue
             .submit(extra.into_iter().chain(std::iter::once(enc.finish())));
@@ -622,6 +593,60 @@ impl App<'_> {
             return;
         }
         gfx.window.request_redraw();
+    }
+}
+
+impl Overlay {
+    /// Draw the panel's shapes over `view` (updating and freeing egui's textures); the command
+    /// buffers egui's callbacks recorded, to submit before `enc`.
+    fn draw(
+        &mut self,
+        ctx: &GpuContext,
+        egui_ctx: &egui::Context,
+        enc: &mut wgpu::CommandEncoder,
+        view: &wgpu::TextureView,
+        full: egui::FullOutput,
+        size: [u32; 2],
+    ) -> Vec<wgpu::CommandBuffer> {
+        let ppp = full.pixels_per_point;
+        let prims = egui_ctx.tessellate(full.shapes, ppp);
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: size,
+            pixels_per_point: ppp,
+        };
+        for (id, deltas) in self.pending.set.drain() {
+            for delta in deltas {
+                self.renderer
+                    .update_texture(&ctx.device, &ctx.queue, id, &delta);
+            }
+        }
+        let extra = self
+            .renderer
+            .update_buffers(&ctx.device, &ctx.queue, enc, &prims, &screen);
+        {
+            let pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("egui"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            self.renderer
+                .render(&mut pass.forget_lifetime(), &prims, &screen);
+        }
+        for id in self.pending.free.drain() {
+            self.renderer.free_texture(&id);
+        }
+        extra
     }
 }
 
