@@ -38,7 +38,6 @@ fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
     let count = u32(sky.header.x);
     let texel = sky.header.y;
     let range = 3.0 * sky.header.z;
-    let size = vec2<f32>(textureDimensions(sky_depth));
     let q = vec4<f32>(s.p + s.ng * (2.0 * texel), 1.0);
     var lit = 0.0;
     var seen = 0.0;
@@ -53,22 +52,21 @@ fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
         }
         let clip = d.view_proj * q;
         let uv = vec2<f32>(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
+        // Nothing between p and the sky (one texel's depth, in the map's 0..1 range over
+        // 3 radii, as a bias).
+        let v = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - texel / range);
         if w > 0.0 {
             lit += w;
-            // One texel's depth in the map's 0..1 range (over 3 radii), as a bias.
-            let z = clip.z - texel / range;
-            seen += w * textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), z);
+            seen += w * v;
         }
         if radius > 0.0 {
+            // Nothing nearer to the sky than `radius` from p: with v, the first surface lies
+            // within the radius where this is 1 and v is 0 (comparisons only: depth textures
+            // cannot be read as values on every backend).
+            let within = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - radius / range);
             let wo = d.dir.w * c;
             area += wo;
-            if all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0)) {
-                let zb = textureLoad(sky_depth, vec2<i32>(uv * size), i32(k), 0);
-                let gap = (clip.z - zb) * range;
-                if gap > texel && gap < radius {
-                    near += wo;
-                }
-            }
+            near += wo * max(within - v, 0.0);
         }
     }
     return vec2<f32>(
