@@ -789,3 +789,48 @@ fn occluders_nearer_than_the_lookup_darken_the_volumes_light() {
     assert!(under.1 > 0.0 && (0.1..0.4).contains(&kept), "{under:?}");
     assert!((open.0 - open.1).abs() <= 0.01 * open.1, "{open:?}");
 }
+
+#[test]
+fn the_rsm_carries_the_albedo_that_multiple_bounces_reflect() {
+    // The lamp's RSM (an area light) keeps each texel's albedo beside the light's flux per unit
+    // colour and area: on cornell, whose materials are untextured, Φ / (colour · w · A) is one
+    // of the materials' diffuse albedos within f16's precision, in every channel (a dim
+    // channel's flux alone, 10⁻⁷ W here, would sit in f16's subnormals).
+    let Some(ctx) = test_context() else { return };
+    let scene = lightlab_scene::builtin::builtin("cornell").unwrap();
+    let albedos: Vec<Vec3> = scene
+        .materials
+        .iter()
+        .map(|m| m.base_color.truncate() * (1.0 - m.metallic))
+        .collect();
+    let s = LpvSettings {
+        grid: 16,
+        rsm_size: 128,
+        sky_lights: 0,
+        ..Default::default()
+    };
+    let r = render_lpv(&ctx, &scene, &s);
+    let l = r.lpv().unwrap();
+    let lamp = rsm_lights(&scene, None, &[], l.grids.last().unwrap(), s.rsm_size)[0].0;
+    let color = Vec3::from_array(lamp.color);
+    let (mut n, mut worst) = (0, 0.0f32);
+    for (f, _, p) in read_rsm(&ctx, &r) {
+        if p[3] <= 0.0 {
+            continue;
+        }
+        let albedo = Vec3::new(f[0], f[1], f[2]) / (color * f[3] * p[3]);
+        let err = albedos
+            .iter()
+            .map(|m| {
+                ((albedo - *m) / m.max(Vec3::splat(0.01)))
+                    .abs()
+                    .max_element()
+            })
+            .fold(f32::INFINITY, f32::min);
+        worst = worst.max(err);
+        n += 1;
+    }
+    eprintln!("cornell's lamp RSM: {n} texels, worst relative albedo error {worst}");
+    assert!(n > 1000, "{n}");
+    assert!(worst < 0.005, "{worst}");
+}
