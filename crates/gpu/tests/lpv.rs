@@ -349,7 +349,7 @@ fn lpv_indirect_light_on_cornell_against_the_reference() {
          {wpi:.4}, fitted ambient {amb_one:.4}"
     );
     // Issue 22 asks for issue 7's target at default settings (≤ ½ the ambient's): not met
-    // yet (0.407 against 0.381, docs/lpv.md); this bounds a regression. (32³ × 8 steps with
+    // yet (0.399 against 0.381, docs/lpv.md); this bounds a regression. (32³ × 8 steps with
     // one bounce scored 0.454 against one bounce.)
     assert!(lpv < 0.45, "defaults regressed: {lpv} (ambient {amb_all})");
     assert!(lpv < 0.8 * undamped, "damping helps: {lpv} vs {undamped}");
