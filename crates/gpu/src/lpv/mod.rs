@@ -546,8 +546,6 @@ pub struct Lpv {
     /// `lpv-faithful` lit by one directional light: that light's RSM view, whose depth the
     /// report's composite reads as its shadow map ([`Lpv::composite_light`]).
     composite_light: Option<RsmLight>,
-    /// The colour of the last view rendered into the RSM textures (for [`Lpv::read_rsm`]).
-    last_color: Vec3,
     rsm_pipeline: wgpu::RenderPipeline,
     rsm_group: wgpu::BindGroup,
     rsm_views: Vec<wgpu::TextureView>,
@@ -616,11 +614,6 @@ impl Lpv {
             lights.insert(0, (camera_view(camera, aspect, &grid, size), 0.0));
         }
         let light_sizes = lights.iter().map(|l| (l.0.size, l.0.sky == 1)).collect();
-        let last_color = lights
-            .iter()
-            .rev()
-            .find(|l| l.0.sky == 0)
-            .map_or(Vec3::ZERO, |l| Vec3::from_array(l.0.color));
         let composite_light = match lights.as_slice() {
             [(only, _)] if settings.scheme == LpvScheme::Wpi && only.kind == 0 => Some(*only),
             _ => None,
@@ -666,7 +659,6 @@ impl Lpv {
             grids,
             light_sizes,
             composite_light,
-            last_color,
             rsm_pipeline,
             rsm_group,
             rsm_views,
@@ -751,10 +743,8 @@ impl Lpv {
         &self.rsm_textures
     }
 
-    /// The last light's RSM read back, row-major: reflected flux Φ (rgb, made from the stored
-    /// albedo as the injection makes it) and the light's flux per unit colour and area (w);
-    /// unit normal + diffuse transmission; position + texel area (0 where the light sees
-    /// nothing).
+    /// The last light's RSM read back, row-major: flux (+0), unit normal + diffuse
+    /// transmission, position + texel area (0 where the light sees nothing).
     pub fn read_rsm(&self, ctx: &GpuContext) -> Result<[Vec<[f32; 4]>; 3], LpvError> {
         let read =
             |i: usize, bpp: u32| crate::resources::read_texture(ctx, &self.rsm_textures[i], bpp);
@@ -764,17 +754,11 @@ impl Lpv {
                 .map(|c| c.map(|v| v.to_f32()))
                 .collect()
         };
-        let position = bytemuck::cast_slice::<u8, [f32; 4]>(&read(2, 16)?).to_vec();
-        let c = self.last_color;
-        let flux = half4(read(0, 8)?)
-            .into_iter()
-            .zip(&position)
-            .map(|(f, p)| {
-                let k = f[3] * p[3];
-                [f[0] * c.x * k, f[1] * c.y * k, f[2] * c.z * k, f[3]]
-            })
-            .collect();
-        Ok([flux, half4(read(1, 8)?), position])
+        Ok([
+            half4(read(0, 8)?),
+            half4(read(1, 8)?),
+            bytemuck::cast_slice::<u8, [f32; 4]>(&read(2, 16)?).to_vec(),
+        ])
     }
 
     /// Record the LPV passes of one frame. `ts(label, compute)` hands out timestamp writes.

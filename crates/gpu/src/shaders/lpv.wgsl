@@ -101,10 +101,9 @@ fn rsm_vs(v: VertexIn) -> RsmVertex {
 }
 
 struct RsmTexel {
-    // The diffuse albedo (rgb) and the light's flux per unit colour and area of the texel (w):
-    // the reflected flux is Φ = albedo × colour × w × A (`rsm_flux_of`). Stored apart because
-    // Φ itself, a texel's share of a light, falls into f16's subnormals (below 6·10⁻⁵) on small
-    // scenes and fine maps. The camera's view (kind 3): albedo, w = 1.
+    // Reflected flux Φ [W] (diffuse albedo × the light's flux through the texel); w = the
+    // light's flux per unit colour and area of the texel (Φ = albedo × colour × w × A), so
+    // that the injection can recover the albedo. The camera's view (kind 3): albedo, w = 1.
     @location(0) flux: vec4<f32>,
     // Unit normal turned towards the light; w = diffuse transmission (thin foliage).
     @location(1) normal: vec4<f32>,
@@ -150,7 +149,7 @@ fn rsm_fs(in: RsmVertex) -> RsmTexel {
     if light.kind == 3u {
         o.flux = vec4<f32>(albedo, 1.0);
     } else {
-        o.flux = vec4<f32>(albedo, per_colour / max(area, 1e-30));
+        o.flux = vec4<f32>(albedo * light.color * per_colour, per_colour / max(area, 1e-30));
     }
     o.normal = vec4<f32>(n, material_transmission(in.uv0, in.uv1));
     o.position = vec4<f32>(in.world, area);
@@ -233,20 +232,21 @@ fn inject_cs(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         return;
     }
-    let flux = rsm_flux_of(f, pos.w);
+    let flux = f.rgb;
     let tr = clamp(nrm.w, 0.0, 1.0);
     inject_vpl(pos.xyz, n, flux * (1.0 - tr));
     if tr > 0.0 {
         inject_vpl(pos.xyz, -n, flux * tr);
     }
     if lpv.occlusion == 1u && light.sky == 0u {
-        inject_blocker(pos.xyz, n, pos.w, f.rgb);
+        inject_blocker(pos.xyz, n, pos.w, rsm_albedo(f, pos.w));
     }
 }
 
-// A light's RSM texel's reflected flux Φ = albedo × colour × w × A (`RsmTexel`).
-fn rsm_flux_of(f: vec4<f32>, area: f32) -> vec3<f32> {
-    return f.rgb * light.color * (f.w * area);
+// The albedo behind a light's RSM texel: Φ / (colour × w × A); 0 in channels the light lacks.
+fn rsm_albedo(f: vec4<f32>, area: f32) -> vec3<f32> {
+    let lit = light.color * (f.w * area);
+    return select(vec3<f32>(0.0), f.rgb / max(lit, vec3<f32>(1e-30)), lit > vec3<f32>(0.0));
 }
 
 // A blocker of area A⊥/|n·l| (capped at 4·A⊥) in the geometry volume, whose cells are centred on
@@ -520,8 +520,7 @@ fn inject_wpi_cs(@builtin(global_invocation_id) id: vec3<u32>) {
             continue;
         }
         let n = safe_normalize(textureLoad(rsm_normal, t, 0).xyz, -l);
-        let texel = textureLoad(rsm_flux, t, 0);
-        let e = texel.rgb * light.color * texel.w;
+        let e = textureLoad(rsm_flux, t, 0).rgb / pos.w;
         let lobe = sh_basis(reflect(l, n)) + WPI_TRANSMIT * sh_basis(l);
         acc[0] += lobe * e.r;
         acc[1] += lobe * e.g;
