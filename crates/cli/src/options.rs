@@ -1250,8 +1250,10 @@ pub struct LpvArgs {
     /// `single` absorbs it (one bounce, Kaplanyan & Dachsbacher's default).
     #[arg(long, default_value = "multiple")]
     pub lpv_bounces: Bounces,
-    /// `lpv`: do not darken the volume's light by occluders nearer than its lookup reaches
-    /// (read from the sky's depth maps; scenes without an environment have none).
+    /// `lpv`: do not limit the volume's light to the share of the hemisphere whose first
+    /// surface lies beyond the lookup's reach (the rest sees the sky, or surfaces nearer than
+    /// the cells resolve; read from the sky's depth maps, so scenes without an environment
+    /// have none).
     #[arg(long)]
     pub no_lpv_near_occlusion: bool,
     /// `lpv`: the sky's diffuse light enters the volume as this many directional RSM views

@@ -61,8 +61,8 @@ impl Family {
             Family::Lpv => {
                 "SH irradiance occluded as the Phong techniques'; the volume adds the bounces of \
                  the lights and of the sky (lpv: 16 directional views, --lpv-sky-lights; \
-                 multiple bounces, --lpv-bounces), darkened by occluders nearer than its cells \
-                 (lpv: --no-lpv-near-occlusion)"
+                 multiple bounces, --lpv-bounces), from the directions whose first surface lies \
+                 beyond its cells (lpv: --no-lpv-near-occlusion)"
             }
             Family::Debug => "none",
         }

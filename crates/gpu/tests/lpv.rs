@@ -696,16 +696,45 @@ fn lpv_faithful_composites_as_the_report() {
     );
 }
 
+/// The first hit of the ray o + t·d (t > 0) with the box [lo, hi] (slab test).
+fn hit_box(o: Vec3, d: Vec3, (lo, hi): (Vec3, Vec3)) -> Option<f32> {
+    let inv = d.recip();
+    let (a, b) = ((lo - o) * inv, (hi - o) * inv);
+    let (near, far) = (a.min(b).max_element(), a.max(b).min_element());
+    (far >= near.max(0.0)).then_some(near.max(0.0))
+}
+
+/// The cosine-weighted share of the upper hemisphere at p (normal +y) in which the first of
+/// `boxes` lies further than `radius` (a 64 × 64 stratified grid of directions).
+fn far_share(p: Vec3, boxes: &[(Vec3, Vec3)], radius: f32) -> f32 {
+    let n = 64;
+    let mut far = 0;
+    for i in 0..n {
+        for j in 0..n {
+            // Malley: a disc point lifted to the hemisphere is cosine-distributed.
+            let (u, v) = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+            let (r, phi) = (u.sqrt(), std::f32::consts::TAU * v);
+            let d = Vec3::new(r * phi.cos(), (1.0 - u).sqrt(), r * phi.sin());
+            let first = boxes
+                .iter()
+                .filter_map(|&b| hit_box(p, d, b))
+                .fold(f32::INFINITY, f32::min);
+            far += (first.is_finite() && first > radius) as u32;
+        }
+    }
+    far as f32 / (n * n) as f32
+}
+
 #[test]
-fn occluders_nearer_than_the_lookup_darken_the_volumes_light() {
-    // A 3 m slab 0.8 m above a 10 m ground under a uniform sky: the volume (16³, cells of about
-    // 0.7 m) cannot resolve the gap, and near occlusion (radius 2.5 cells, about 1.8 m)
-    // darkens the volume's light on the ground under it (the slab covers about 3/4 of the
-    // cosine-weighted sky there); ground more than 2 m from it keeps its light.
+fn the_volumes_light_comes_only_from_surfaces_beyond_the_lookup() {
+    // A 10 m ground under a uniform sky with a slab 0.8 m above it and a 3 m wall beside it.
+    // The volume (16³, cells of about 0.7 m) cannot resolve the slab's gap, and the ground
+    // under the open sky gets the sky's light, no bounce: each ground point keeps the share of
+    // its hemisphere (cosine-weighted) whose first surface lies beyond the lookup's reach
+    // (2.5 cells, about 1.8 m), computed here by casting rays at the two boxes.
     let Some(ctx) = test_context() else { return };
     let mut scene = Scene::default();
     let m = scene.add_material(lightlab_scene::Material::diffuse("grey", Vec3::splat(0.5)));
-    let h = 0.8;
     let ground = lightlab_scene::builtin::geom::quad_facing(
         "ground",
         [
@@ -718,13 +747,12 @@ fn occluders_nearer_than_the_lookup_darken_the_volumes_light() {
         m,
     );
     scene.add_mesh(ground, glam::Mat4::IDENTITY);
-    let slab = lightlab_scene::builtin::geom::aabb_box(
-        "slab",
-        Vec3::new(-1.5, h, -1.5),
-        Vec3::new(1.5, h + 0.2, 1.5),
-        m,
-    );
-    scene.add_mesh(slab, glam::Mat4::IDENTITY);
+    let slab = (Vec3::new(-2.5, 0.8, -1.5), Vec3::new(0.0, 1.0, 1.5));
+    let wall = (Vec3::new(2.8, 0.0, -5.0), Vec3::new(3.0, 3.0, 5.0));
+    for (name, (lo, hi)) in [("slab", slab), ("wall", wall)] {
+        let mesh = lightlab_scene::builtin::geom::aabb_box(name, lo, hi, m);
+        scene.add_mesh(mesh, glam::Mat4::IDENTITY);
+    }
     scene.cameras.push(lightlab_scene::Camera::look_at(
         "low",
         Vec3::new(0.0, 0.4, 4.8),
@@ -753,39 +781,54 @@ fn occluders_nearer_than_the_lookup_darken_the_volumes_light() {
     let (off, none) = render(false);
     assert_eq!(none, 0.0);
     assert!((1.4..2.0).contains(&radius), "{radius}");
-    // Each pixel's ground point (its camera ray meets y = 0 below the slab's underside).
+    // Each pixel's ground point: its camera ray meets y = 0 before either box.
     let cam = scene.default_camera().unwrap();
     let ground_at = |x: u32, y: u32| -> Option<Vec3> {
         let ndc = glam::Vec2::new((x as f32 + 0.5) / 32.0 - 1.0, 1.0 - (y as f32 + 0.5) / 32.0);
         let (o, d) = (cam.position(), cam.ray_direction(ndc, 1.0));
-        (d.y < 0.0).then(|| o - d * (o.y / d.y))
+        let t = -o.y / d.y;
+        let blocked = [slab, wall]
+            .iter()
+            .any(|&b| hit_box(o, d, b).is_some_and(|h| h < t));
+        (d.y < 0.0 && !blocked).then(|| o + d * t)
     };
     let lum = lightlab_core::color::luminance;
-    let (mut under, mut open) = ((0.0f32, 0.0f32, 0), (0.0f32, 0.0f32, 0));
+    // (kept, expected, pixels) over all ground pixels, and under the slab's middle.
+    let (mut all, mut under) = ((0.0f32, 0.0f32, 0), (0.0f32, 0.0f32, 0));
+    let mut worst = 0.0f32;
     for y in 0..64 {
         for x in 0..64 {
             let (a, b) = (lum(on.get(x, y)), lum(off.get(x, y)));
             assert!(a <= b * 1.001 + 1e-6, "({x}, {y}): {a} vs {b}");
             let Some(p) = ground_at(x, y) else { continue };
-            if p.x.abs() < 0.75 && p.z.abs() < 0.75 {
-                under = (under.0 + a, under.1 + b, under.2 + 1);
-            } else if p.z > 3.5 && p.x.abs() < 3.0 {
-                open = (open.0 + a, open.1 + b, open.2 + 1);
+            if b <= 1e-6 || p.x.abs() > 4.5 || p.z.abs() > 4.5 {
+                continue;
+            }
+            let (kept, expected) = (a / b, far_share(p, &[slab, wall], radius));
+            worst = worst.max((kept - expected).abs());
+            all = (all.0 + (kept - expected).abs(), all.1 + expected, all.2 + 1);
+            if (-2.0..-0.5).contains(&p.x) && p.z.abs() < 1.0 {
+                under = (under.0 + kept, under.1 + expected, under.2 + 1);
             }
         }
     }
+    let n = all.2.max(1) as f32;
     eprintln!(
-        "near occlusion, radius {radius:.2} m: under the slab {:.4} of its light ({} pixels), \
-         open ground {:.4} ({} pixels)",
-        under.0 / under.1,
-        under.2,
-        open.0 / open.1,
-        open.2
+        "radius {radius:.2} m: {} ground pixels, mean |kept − expected| {:.4} (mean expected \
+         {:.4}, worst {worst:.3}); under the slab kept {:.4}, expected {:.4} ({} pixels)",
+        all.2,
+        all.0 / n,
+        all.1 / n,
+        under.0 / under.2.max(1) as f32,
+        under.1 / under.2.max(1) as f32,
+        under.2
     );
-    assert!(under.2 >= 10 && open.2 >= 10, "{under:?} {open:?}");
-    // The cosine-weighted share of the sky the slab covers within the radius, at the ground's
-    // centre: directions within 62° of the zenith, sin²62° ≈ 0.78 (measured: 0.24 kept).
-    let kept = under.0 / under.1.max(1e-12);
-    assert!(under.1 > 0.0 && (0.1..0.4).contains(&kept), "{under:?}");
-    assert!((open.0 - open.1).abs() <= 0.01 * open.1, "{open:?}");
+    assert!(all.2 >= 500 && under.2 >= 10, "{all:?} {under:?}");
+    assert!(all.0 / n < 0.05, "mean |kept − expected| {}", all.0 / n);
+    // Under the slab the volume keeps only the wall's share, low along the ground.
+    let (kept, expected) = (under.0 / under.2 as f32, under.1 / under.2 as f32);
+    assert!(
+        expected < 0.15 && (kept - expected).abs() < 0.05,
+        "{under:?}"
+    );
 }

@@ -93,9 +93,11 @@ pub struct LpvSettings {
     /// reflected × the blocking surfaces' albedo (`Multiple`, the default; Kaplanyan only,
     /// with `occlusion`; see `lightlab_core::lpv::Bounces`).
     pub bounces: lpv::Bounces,
-    /// Darken the volume's light by the occlusion nearer than its lookup reaches (0.5 +
-    /// `damping` cells of the scene's grid), read from the sky's depth maps (Kaplanyan only;
-    /// needs an environment, so none on cornell). See [`Lpv::near_occlusion_radius`].
+    /// Keep the volume's light only from the share of the hemisphere whose first surface lies
+    /// beyond the lookup's reach (0.5 + `damping` cells of the scene's grid): not from the
+    /// open sky, nor from surfaces nearer than the cells resolve. Read from the sky's depth
+    /// maps (Kaplanyan only; needs an environment, so none on cornell). See
+    /// [`Lpv::near_occlusion_radius`].
     pub near_occlusion: bool,
     /// The sky's light injected as this many directional RSM views (the environment split into
     /// cells, `raster::ambient::sky::sky_lights`), so that the volume carries the bounce of sky
@@ -673,13 +675,15 @@ impl Lpv {
         })
     }
 
-    /// The radius [m] within which surfaces occlude the volume's light at a lookup (0: off).
-    /// A lookup reads the volume half a cell out along the normal and, with damping, `damping`
-    /// cells further: a surface nearer than that is below what the volume resolves, and the
-    /// light the volume holds there arrives around it. The ambient pass counts, over the sky's
-    /// shadow-mapped directions (cosine and solid-angle weighted), those whose first surface
-    /// lies within this radius, and keeps 1 − that share of the volume's light (Crytek paired
-    /// their volumes with screen-space occlusion of about a cell for the same reason).
+    /// The lookup's reach [m]: the volume's light comes only from surfaces further than this
+    /// (0: off). A lookup reads the volume half a cell out along the normal and, with damping,
+    /// `damping` cells further: a surface nearer than that is below what the volume resolves,
+    /// and the light the volume holds there arrives around it; a direction that sees the sky
+    /// brings the sky's light and no bounce, though the 2-band lobes spread a surface's
+    /// outgoing light over it. The ambient pass keeps, of the volume's light, the share of the
+    /// sky's shadow-mapped directions (cosine and solid-angle weighted) whose first surface
+    /// lies beyond this radius (Crytek paired their volumes with screen-space occlusion of
+    /// about a cell for the near part).
     pub fn near_occlusion_radius(&self) -> f32 {
         if !self.settings.near_occlusion || self.settings.scheme != LpvScheme::Kaplanyan {
             return 0.0;

@@ -174,9 +174,10 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     if lpv_u.mode == 2u && lpv_u.sun_dir.w > 0.5 && lpv_u.indirect_only == 0u {
         return wpi_composite(s) + emission(in);
     }
-    // The sky's visibility and the near occlusion of the volume's light, in one pass.
+    // The sky's visibility and the share of the hemisphere the volume's light comes from (the
+    // surfaces beyond the lookup's reach), in one pass.
     let sky_t = sky_terms(s, lpv_u.occlusion_radius);
-    let indirect = s.diffuse / PI * e * (1.0 - sky_t.y);
+    let indirect = s.diffuse / PI * e * sky_t.y;
     if lpv_u.indirect_only == 1u {
         return indirect;
     }

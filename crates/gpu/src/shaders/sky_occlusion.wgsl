@@ -22,8 +22,8 @@ struct SkyOcclusion {
 @group(2) @binding(10) var<storage, read> sky: SkyOcclusion;
 
 // The fraction of the sky's irradiance at n that reaches p (x) and, when `radius` > 0, the
-// near occlusion within `radius` (y), in one pass over the directions (they share each
-// direction's projection).
+// share of the hemisphere from which the light volume's light can arrive (y), in one pass over
+// the directions (they share each direction's projection).
 //
 // x: Σ V_k E_k(n) / Σ E_k(n) by luminance, E_k(n) = E⊥_k ⟨n, ω_k⟩₊ the cell as a small source,
 // V_k one bilinear depth comparison (2 × 2 texels) with the point moved off the surface by two
@@ -31,9 +31,11 @@ struct SkyOcclusion {
 // sampled for it.
 //
 // y: the share of the hemisphere around n (cosine-weighted, each direction by its cell's solid
-// angle, dir.w) in which the first surface seen from the sky along ω_k lies between p and the
-// sky within `radius` of p: occlusion closer than the light volume's cells, which the volume
-// cannot resolve; 0 without directions.
+// angle, dir.w) in which the first surface seen from p along ω_k lies further than `radius`.
+// Indirect light arrives only from surfaces: where p sees the sky (V_k = 1) it gets the sky's
+// light, which x covers, and no bounce; where the first surface lies within `radius` it is
+// nearer than the volume's cells resolve (the volume holds light from beyond it). The volume's
+// blurred 2-band light stands for the rest; 1 without directions.
 fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
     let count = u32(sky.header.x);
     let texel = sky.header.y;
@@ -42,7 +44,7 @@ fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
     var lit = 0.0;
     var seen = 0.0;
     var area = 0.0;
-    var near = 0.0;
+    var far = 0.0;
     for (var k = 0u; k < count; k++) {
         let d = sky.dirs[k];
         let c = dot(s.n, d.cell.xyz);
@@ -60,18 +62,18 @@ fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
             seen += w * v;
         }
         if radius > 0.0 {
-            // Nothing nearer to the sky than `radius` from p: with v, the first surface lies
-            // within the radius where this is 1 and v is 0 (comparisons only: depth textures
-            // cannot be read as values on every backend).
+            // Nothing nearer to the sky than `radius` from p: where this is 0 a surface lies
+            // beyond the radius (comparisons only: depth textures cannot be read as values on
+            // every backend).
             let within = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - radius / range);
             let wo = d.dir.w * c;
             area += wo;
-            near += wo * max(within - v, 0.0);
+            far += wo * (1.0 - within);
         }
     }
     return vec2<f32>(
         select(1.0, seen / max(lit, 1e-8), count > 0u && lit > 0.0),
-        select(0.0, near / max(area, 1e-8), area > 0.0),
+        select(1.0, far / max(area, 1e-8), area > 0.0),
     );
 }
 
