@@ -510,7 +510,7 @@ pub struct RasterArgs {
     #[arg(long, default_value = "on", value_parser = ["on", "off"])]
     pub env_sun: String,
     /// Sky directions whose shadow maps occlude the Phong techniques' diffuse sky light (the
-    /// scene seen from each; 0: the sky light is unshadowed).
+    /// scene seen from each, up to 256; 0: the sky light is unshadowed).
     #[arg(long, default_value_t = 64)]
     pub sky_occlusion: u32,
     /// How glass (KHR_materials_transmission) refracts the environment: one interface, or two

@@ -169,6 +169,26 @@ fn bad_render_requests_fail_with_clear_errors_and_no_output() {
         &out,
         "no camera 3",
     );
+    // More sky directions than a depth texture array holds layers (once a wgpu panic).
+    assert_fails_cleanly(
+        &[
+            "render",
+            "--scene",
+            "room",
+            "--technique",
+            "phong-shadow-maps",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--sky-occlusion",
+            "512",
+            "-o",
+            o,
+        ],
+        &out,
+        "sky occlusion directions 512 must be at most 256",
+    );
     for bad in [
         "--exposure=NaN",
         "--exposure=inf",

@@ -354,6 +354,13 @@ impl RasterSettings {
                 s.shadow_size
             )));
         }
+        let max_sky = super::ambient::MAX_SKY_OCCLUSION_DIRECTIONS;
+        if s.sky_occlusion > max_sky {
+            return Err(RasterError::Settings(format!(
+                "sky occlusion directions {} must be at most {max_sky} (one depth-map layer each)",
+                s.sky_occlusion
+            )));
+        }
         if !(1..=4).contains(&s.cascades) {
             return Err(RasterError::Settings("cascades must be 1 to 4".into()));
         }

@@ -15,7 +15,10 @@ mod sh;
 mod sky;
 
 pub(super) use sh::ShResources;
-pub use sky::{DEFAULT_DIRECTIONS as SKY_OCCLUSION_DIRECTIONS, SkyOcclusion, sky_lights};
+pub use sky::{
+    DEFAULT_DIRECTIONS as SKY_OCCLUSION_DIRECTIONS, MAX_DIRECTIONS as MAX_SKY_OCCLUSION_DIRECTIONS,
+    SkyOcclusion, sky_lights,
+};
 
 use super::bindings::{buffer, filtered_texture, sampler};
 use super::settings::Ambient;

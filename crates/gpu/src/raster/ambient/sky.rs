@@ -25,6 +25,9 @@ use wgpu::util::DeviceExt;
 
 /// Directions by default (`--sky-occlusion`).
 pub const DEFAULT_DIRECTIONS: u32 = 64;
+/// At most this many directions: each is a layer of one depth texture array, and WebGPU's
+/// default limit on array layers is 256.
+pub const MAX_DIRECTIONS: u32 = 256;
 /// Lloyd steps that move the directions towards the sky's light, and the share of the mean
 /// luminance every texel counts with besides its own ([`importance_directions`]). Measured on
 /// the sky's error against `direct` (320 × 240, `--ssaa 2`): room 0.0044 → 0.0042, atrium 0.0142
