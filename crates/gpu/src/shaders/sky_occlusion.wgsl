@@ -21,13 +21,28 @@ struct SkyOcclusion {
 @group(2) @binding(9) var sky_cmp: sampler_comparison;
 @group(2) @binding(10) var<storage, read> sky: SkyOcclusion;
 
+// How far [m] along ng a point moves before its depth comparison with a map looking along a
+// direction at cos θ = cg to ng, `texel` the map's texel [m]. The bilinear comparison reads
+// texels up to one texel across, where the surface lies texel·tan θ deeper; the comparison's
+// own bias is one texel of depth, so the point must rise by texel·(tan θ − 1) towards the
+// map: an offset δ along ng gains δ·cos θ, so δ = texel·(sin θ − cos θ)/cos²θ (0 up to 45°,
+// capped at two texels from 65° on, where the cosine weight is small). A constant offset of
+// two texels (before) opened the gaps of a dense canopy to the sky. GPU test
+// `the_occluded_sky_leaves_convex_objects_unshadowed` holds it to no acne; figures in
+// docs/phong-and-shadows.md.
+fn receiver_offset(cg: f32, texel: f32) -> f32 {
+    let c = clamp(abs(cg), 0.0, 1.0);
+    let sn = sqrt(1.0 - c * c);
+    return texel * clamp((sn - c) / max(c * c, 0.05), 0.0, 2.0);
+}
+
 // The fraction of the sky's irradiance at n that reaches p (x) and, when `radius` > 0, the
 // share of the hemisphere from which the light volume's light can arrive (y), in one pass over
 // the directions (they share each direction's projection).
 //
 // x: Σ V_k E_k(n) / Σ E_k(n) by luminance, E_k(n) = E⊥_k ⟨n, ω_k⟩₊ the cell as a small source,
-// V_k one bilinear depth comparison (2 × 2 texels) with the point moved off the surface by two
-// texels along ng; 1 without occlusion. Directions whose cell does not light n are not
+// V_k one bilinear depth comparison (2 × 2 texels) with the point moved off the surface along
+// ng by `receiver_offset`; 1 without occlusion. Directions whose cell does not light n are not
 // sampled for it.
 //
 // y: the share of the hemisphere around n (cosine-weighted, each direction by its cell's solid
@@ -40,7 +55,6 @@ fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
     let count = u32(sky.header.x);
     let texel = sky.header.y;
     let range = 3.0 * sky.header.z;
-    let q = vec4<f32>(s.p + s.ng * (2.0 * texel), 1.0);
     var lit = 0.0;
     var seen = 0.0;
     var area = 0.0;
@@ -52,6 +66,7 @@ fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
         if c <= 0.0 || (w <= 0.0 && radius <= 0.0) {
             continue;
         }
+        let q = vec4<f32>(s.p + s.ng * receiver_offset(dot(s.ng, d.cell.xyz), texel), 1.0);
         let clip = d.view_proj * q;
         let uv = vec2<f32>(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
         // Nothing between p and the sky (one texel's depth, in the map's 0..1 range over
