@@ -41,8 +41,38 @@ pub fn mirror() -> Scene {
         "pillar_yellow",
         Vec3::new(0.8, 0.7, 0.15),
     ));
-    // Floor and walls as grids (per-vertex methods hold their shading); a grid faces
-    // ∂v × ∂u.
+    mirror_room(&mut s, [floor, wall, green_wall, blue_wall]);
+    mirror_glass(&mut s, silver, frame);
+    mirror_objects(&mut s, red, blue, yellow);
+    s.lights.push(Light {
+        name: "lamp".into(),
+        kind: LightKind::Point,
+        color: Vec3::new(1.0, 0.95, 0.85),
+        intensity: 18.0,
+        position: Vec3::new(1.2, 2.7, 0.8),
+        direction: Vec3::NEG_Y,
+        range: None,
+    });
+    s.environment = Some(super::sky_env(
+        128,
+        Vec3::new(0.2, 0.3, 0.55),
+        Vec3::new(0.45, 0.5, 0.6),
+        Vec3::new(0.2, 0.18, 0.15),
+        &[],
+    ));
+    s.cameras.push(Camera::look_at(
+        "mirror_camera",
+        Vec3::new(2.3, 1.6, 3.4),
+        Vec3::new(-0.2, 1.0, -1.6),
+        Vec3::Y,
+        55f32.to_radians(),
+    ));
+    s
+}
+
+/// Floor and walls as grids (per-vertex methods hold their shading); a grid faces ∂v × ∂u.
+/// Materials: floor, back and right wall, left wall, front wall.
+fn mirror_room(s: &mut Scene, [floor, wall, green_wall, blue_wall]: [usize; 4]) {
     s.add_mesh(
         parametric("floor", 24, 24, floor, Vec2::new(6.0, 6.0), |u, v| {
             Vec3::new(-3.0 + 6.0 * u, 0.0, -2.0 + 6.0 * v)
@@ -83,6 +113,10 @@ pub fn mirror() -> Scene {
         ),
         Mat4::IDENTITY,
     );
+}
+
+/// The silver glass on the back wall and its dark frame.
+fn mirror_glass(s: &mut Scene, silver: usize, frame: usize) {
     let (c, h) = (MIRROR_CENTRE, MIRROR_HALF);
     s.add_mesh(
         quad(
@@ -127,6 +161,10 @@ pub fn mirror() -> Scene {
             Mat4::IDENTITY,
         );
     }
+}
+
+/// The ball, the box and the pillar in front of the mirror.
+fn mirror_objects(s: &mut Scene, red: usize, blue: usize, yellow: usize) {
     s.add_mesh(
         sphere("ball", 0.35, 48, 24, red),
         Mat4::from_translation(Vec3::new(-0.7, 0.35, -0.9)),
@@ -144,28 +182,4 @@ pub fn mirror() -> Scene {
         ),
         Mat4::from_translation(Vec3::new(-1.9, 0.0, 0.3)),
     );
-    s.lights.push(Light {
-        name: "lamp".into(),
-        kind: LightKind::Point,
-        color: Vec3::new(1.0, 0.95, 0.85),
-        intensity: 18.0,
-        position: Vec3::new(1.2, 2.7, 0.8),
-        direction: Vec3::NEG_Y,
-        range: None,
-    });
-    s.environment = Some(super::sky_env(
-        128,
-        Vec3::new(0.2, 0.3, 0.55),
-        Vec3::new(0.45, 0.5, 0.6),
-        Vec3::new(0.2, 0.18, 0.15),
-        &[],
-    ));
-    s.cameras.push(Camera::look_at(
-        "mirror_camera",
-        Vec3::new(2.3, 1.6, 3.4),
-        Vec3::new(-0.2, 1.0, -1.6),
-        Vec3::Y,
-        55f32.to_radians(),
-    ));
-    s
 }

@@ -366,17 +366,40 @@ fn room() -> Scene {
 /// roof), with four coloured banners hanging in the upper gallery. The sun (elevation 53°)
 /// lights half the courtyard and reaches into the north gallery; everything else is lit by
 /// the sky and by bounces, so indirect light and sky occlusion dominate.
+// The atrium's courtyard x ∈ [−8, 8], z ∈ [−4, 4]; galleries out to |x| = 10, |z| = 6;
+// storeys at 0–3.3 m (slab 3.3–3.6) and 3.6–7 m (roof 7–7.3).
+const ATRIUM_COURT: (f32, f32) = (8.0, 4.0);
+const ATRIUM_OUTER: (f32, f32) = (10.0, 6.0);
+
 fn atrium() -> Scene {
     let mut s = Scene::default();
     let stone = s.add_material(Material::diffuse("stone", Vec3::new(0.62, 0.57, 0.47)));
     let paving = s.add_material(Material::diffuse("paving", Vec3::new(0.5, 0.46, 0.4)));
     let plaster = s.add_material(Material::diffuse("plaster", Vec3::splat(0.72)));
+    let mut parts = atrium_shell(paving, plaster);
+    parts.extend(atrium_storeys(stone));
+    for p in parts {
+        s.add_mesh(p, Mat4::IDENTITY);
+    }
+    atrium_columns(&mut s, stone);
+    atrium_banners(&mut s);
+    add_clear_day(&mut s, Vec3::new(-0.35, -0.8, 0.45));
+    s.cameras.push(Camera::look_at(
+        "atrium_camera",
+        Vec3::new(-7.4, 1.7, -3.3),
+        Vec3::new(6.0, 3.4, 3.2),
+        Vec3::Y,
+        70f32.to_radians(),
+    ));
+    s
+}
+
+/// The atrium's ground and its four outer walls.
+fn atrium_shell(paving: usize, plaster: usize) -> Vec<Mesh> {
     let b = |name: &str, min: Vec3, max: Vec3, m| aabb_box(name, min, max, m);
-    // Courtyard x ∈ [−8, 8], z ∈ [−4, 4]; galleries out to |x| = 10, |z| = 6; storeys at
-    // 0–3.3 m (slab 3.3–3.6) and 3.6–7 m (roof 7–7.3).
-    let (cx, cz, ox, oz) = (8.0, 4.0, 10.0, 6.0);
+    let (ox, oz) = ATRIUM_OUTER;
     let t = 0.3;
-    let mut parts = vec![
+    vec![
         b(
             "ground",
             Vec3::new(-ox - t, -0.2, -oz - t),
@@ -407,8 +430,14 @@ fn atrium() -> Scene {
             Vec3::new(ox, 7.3, -oz),
             plaster,
         ),
-    ];
-    // Each storey's slab over the gallery ring, and its lintels along the courtyard's edge.
+    ]
+}
+
+/// Each storey's slab over the gallery ring, and its lintels along the courtyard's edge.
+fn atrium_storeys(stone: usize) -> Vec<Mesh> {
+    let b = |name: &str, min: Vec3, max: Vec3, m| aabb_box(name, min, max, m);
+    let ((cx, cz), (ox, oz)) = (ATRIUM_COURT, ATRIUM_OUTER);
+    let mut parts = vec![];
     for (level, (y0, y1)) in [(3.3, 3.6), (7.0, 7.3)].into_iter().enumerate() {
         let name = |what: &str| format!("{what}_{level}");
         parts.extend([
@@ -466,10 +495,12 @@ fn atrium() -> Scene {
             ),
         ]);
     }
-    for p in parts {
-        s.add_mesh(p, Mat4::IDENTITY);
-    }
-    // Columns every 2 m along the courtyard's edge, on both storeys.
+    parts
+}
+
+/// Columns every 2 m along the courtyard's edge, on both storeys.
+fn atrium_columns(s: &mut Scene, stone: usize) {
+    let (cx, cz) = ATRIUM_COURT;
     let ground_column = s.add_mesh(cylinder("column_0", 0.22, 2.8, 24, stone), Mat4::IDENTITY);
     let upper_column = s.add_mesh(cylinder("column_1", 0.2, 2.9, 24, stone), Mat4::IDENTITY);
     // One instance per column position instead of each mesh's instance at the origin.
@@ -495,7 +526,12 @@ fn atrium() -> Scene {
             });
         }
     }
-    // Banners between the upper columns, hanging from the lintel.
+}
+
+/// Banners between the upper columns, hanging from the lintel.
+fn atrium_banners(s: &mut Scene) {
+    let b = |name: &str, min: Vec3, max: Vec3, m| aabb_box(name, min, max, m);
+    let cz = ATRIUM_COURT.1;
     for (name, colour, x, z) in [
         ("banner_red", Vec3::new(0.7, 0.08, 0.06), -5.0, cz),
         ("banner_blue", Vec3::new(0.08, 0.15, 0.6), 3.0, cz),
@@ -513,15 +549,6 @@ fn atrium() -> Scene {
             Mat4::IDENTITY,
         );
     }
-    add_clear_day(&mut s, Vec3::new(-0.35, -0.8, 0.45));
-    s.cameras.push(Camera::look_at(
-        "atrium_camera",
-        Vec3::new(-7.4, 1.7, -3.3),
-        Vec3::new(6.0, 3.4, 3.2),
-        Vec3::Y,
-        70f32.to_radians(),
-    ));
-    s
 }
 
 /// A floor, four pillars, boxes and a sphere (closed meshes) under three point and two spot
