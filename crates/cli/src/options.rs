@@ -511,7 +511,7 @@ pub struct RasterArgs {
     pub env_sun: String,
     /// Sky directions whose shadow maps occlude the Phong techniques' diffuse sky light (the
     /// scene seen from each, up to 256; 0: the sky light is unshadowed).
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = lightlab_gpu::raster::SKY_OCCLUSION_DIRECTIONS)]
     pub sky_occlusion: u32,
     /// How glass (KHR_materials_transmission) refracts the environment: one interface, or two
     /// (in and out through the object's bounding sphere: exact for a ball).
@@ -568,7 +568,7 @@ impl Default for RasterArgs {
             dynamic_env: false,
             dynamic_env_every: 1,
             env_sun: "on".into(),
-            sky_occlusion: 64,
+            sky_occlusion: lightlab_gpu::raster::SKY_OCCLUSION_DIRECTIONS,
             refraction: Refraction::Two,
             env_texels: 2 * 256 * 256,
             planar_mirrors: "on".into(),

@@ -50,21 +50,23 @@ pub enum Family {
 impl Family {
     /// How the family's images get the sky's diffuse light (the environment, or a constant
     /// ambient), for the report and `--help` (issue 22).
-    pub fn sky_term(self) -> &'static str {
+    pub fn sky_term(self) -> String {
         match self {
-            Family::PathTraced => "traced: every sky ray is occluded exactly",
-            Family::Phong => {
-                "SH irradiance occluded through 64 shadow-mapped sky directions (--sky-occlusion)"
-            }
-            Family::Lightmap => "baked into the light-map, occluded and bounced by the bake",
-            Family::Sh => "SH transfer: shadowed (and inter-reflected) by the bake",
+            Family::PathTraced => "traced: every sky ray is occluded exactly".into(),
+            Family::Phong => format!(
+                "SH irradiance occluded through {} shadow-mapped sky directions (--sky-occlusion)",
+                lightlab_gpu::raster::SKY_OCCLUSION_DIRECTIONS
+            ),
+            Family::Lightmap => "baked into the light-map, occluded and bounced by the bake".into(),
+            Family::Sh => "SH transfer: shadowed (and inter-reflected) by the bake".into(),
             Family::Lpv => {
                 "SH irradiance occluded as the Phong techniques'; the volume adds the bounces of \
                  the lights and of the sky (lpv: 16 directional views, --lpv-sky-lights; \
                  multiple bounces, --lpv-bounces), from the directions whose first surface lies \
                  beyond its cells (lpv: --no-lpv-near-occlusion)"
+                    .into()
             }
-            Family::Debug => "none",
+            Family::Debug => "none".into(),
         }
     }
 }

@@ -721,6 +721,97 @@ fn the_occluded_sky_matches_the_path_tracer_in_a_closed_room() {
     );
 }
 
+/// The occluded sky keeps the colour of the part of the sky a point sees: a courtyard's floor,
+/// walled in, sees the blue zenith and not the warm band near the horizon, so its sky light is
+/// blue, as the path tracer's. (The visibility was once a luminance ratio applied to the whole
+/// sky's irradiance, which gave the floor the whole sky's colour: blue / red 1.2 where the path
+/// tracer has 5.8.)
+#[test]
+fn the_occluded_sky_keeps_the_colour_of_what_it_sees() {
+    let Some(ctx) = test_context() else {
+        return;
+    };
+    let mut scene = Scene::default();
+    let grey = scene.add_material(lightlab_scene::Material::diffuse("grey", Vec3::splat(0.5)));
+    let boxes = [
+        (Vec3::new(-2.2, -0.1, -2.2), Vec3::new(2.2, 0.0, 2.2)),
+        (Vec3::new(2.0, 0.0, -2.2), Vec3::new(2.2, 3.0, 2.2)),
+        (Vec3::new(-2.2, 0.0, -2.2), Vec3::new(-2.0, 3.0, 2.2)),
+        (Vec3::new(-2.0, 0.0, 2.0), Vec3::new(2.0, 3.0, 2.2)),
+        (Vec3::new(-2.0, 0.0, -2.2), Vec3::new(2.0, 3.0, -2.0)),
+    ];
+    for (i, (lo, hi)) in boxes.into_iter().enumerate() {
+        let mesh = builtin::geom::aabb_box(&format!("part{i}"), lo, hi, grey);
+        scene.add_mesh(mesh, glam::Mat4::IDENTITY);
+    }
+    // Blue above 50° of elevation, warm white below, a dark ground.
+    let (w, h) = (128u32, 64u32);
+    scene.environment = Some(lightlab_scene::Environment {
+        image: Image::from_fn(w, h, |_, y| {
+            let elevation = 90.0 - (y as f32 + 0.5) / h as f32 * 180.0;
+            if elevation > 50.0 {
+                Vec3::new(0.1, 0.3, 1.0)
+            } else if elevation > 0.0 {
+                Vec3::new(1.0, 0.8, 0.6)
+            } else {
+                Vec3::splat(0.05)
+            }
+        }),
+        intensity: 1.0,
+    });
+    scene.cameras.push(Camera::look_at(
+        "view",
+        Vec3::new(0.3, 2.5, 1.0),
+        Vec3::new(0.0, 0.0, -0.3),
+        Vec3::Y,
+        0.6,
+    ));
+    let (w, h) = (64, 64);
+    let accel = Accel::new(&scene);
+    let traced = PathTracer::new(&scene, &accel)
+        .render(
+            &RenderSettings {
+                width: w,
+                height: h,
+                spp: 64,
+                max_depth: 1,
+                min_depth: 0,
+                seed: 3,
+                camera: 0,
+                lens: Default::default(),
+            },
+            &|_, _| true,
+        )
+        .unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        RasterSettings {
+            width: w * 2,
+            height: h * 2,
+            shadows: ShadowMethod::Map,
+            ambient: Ambient::Environment,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    r.render(&ctx);
+    let gpu = r.read_hdr(&ctx).unwrap().downsample(2);
+    let mean = |i: &Image| i.data.iter().copied().sum::<Vec3>() / i.data.len() as f32;
+    let (g, t) = (mean(&gpu), mean(&traced));
+    let (bg, bt) = (g.z / g.x, t.z / t.x);
+    eprintln!("courtyard floor: GPU {g:?} (blue / red {bg:.3}), traced {t:?} ({bt:.3})");
+    assert!(
+        (bg / bt - 1.0).abs() < 0.1,
+        "blue / red: GPU {bg}, traced {bt}"
+    );
+    let lum = lightlab_core::color::luminance;
+    assert!(
+        (lum(g) / lum(t) - 1.0).abs() < 0.1,
+        "GPU {g:?}, traced {t:?}"
+    );
+}
+
 /// No acne from the shadow-mapped sky: a convex object under a uniform sky sees all of the
 /// sky above every point of it, so the occluded sky must light it as the unoccluded one does
 /// (a sphere for curved surfaces at every angle to the directions, a tilted box for flat ones).

@@ -33,7 +33,7 @@ mod readback;
 mod settings;
 mod targets;
 
-pub use ambient::{LightmapInput, SourceKind, sky_lights};
+pub use ambient::{LightmapInput, SKY_OCCLUSION_DIRECTIONS, SourceKind, sky_lights};
 pub use settings::{
     Ambient, BadAmbient, CannedLight, CannedPasses, EnvDiffuse, EnvMapKind, EnvPrefilter,
     FieldObject, FrameTimes, MAX_AREA_LIGHTS, NormalFilter, RasterError, RasterSettings,

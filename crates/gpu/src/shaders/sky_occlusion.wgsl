@@ -2,9 +2,9 @@
 // the fraction of the environment's diffuse light that reaches a point, from shadow-mapped sky
 // directions. Compiled after raster.wgsl, before the source's own WGSL; group 2, bindings 8–10.
 
-// One sky direction: its orthographic view-projection, the unit direction towards the sky
-// (xyz) with its cell's solid angle (w), and its cell: the flux-weighted mean direction (xyz)
-// and the luminance of E⊥ = Σ L·ΔΩ (w).
+// One sky direction: its orthographic view-projection, the unit direction towards the sky (its
+// cell's flux-weighted mean direction, xyz) with the cell's solid angle (w), and the cell's
+// E⊥ = Σ L·ΔΩ (rgb; w unused).
 struct SkyDir {
     view_proj: mat4x4<f32>,
     dir: vec4<f32>,
@@ -36,46 +36,46 @@ fn receiver_offset(cg: f32, texel: f32) -> f32 {
     return texel * clamp((sn - c) / max(c * c, 0.05), 0.0, 2.0);
 }
 
-// The fraction of the sky's irradiance at n that reaches p (x) and, when `radius` > 0, the
-// share of the hemisphere from which the light volume's light can arrive (y), in one pass over
+// The fraction of the sky's irradiance at n that reaches p (rgb) and, when `radius` > 0, the
+// share of the hemisphere from which the light volume's light can arrive (a), in one pass over
 // the directions (they share each direction's projection).
 //
-// x: Σ V_k E_k(n) / Σ E_k(n) by luminance, E_k(n) = E⊥_k ⟨n, ω_k⟩₊ the cell as a small source,
+// rgb: Σ V_k E_k(n) / Σ E_k(n) per channel, E_k(n) = E⊥_k ⟨n, ω_k⟩₊ the cell as a small source,
 // V_k one bilinear depth comparison (2 × 2 texels) with the point moved off the surface along
 // ng by `receiver_offset`; 1 without occlusion. Directions whose cell does not light n are not
-// sampled for it.
+// sampled for it. Per channel, not by luminance: where a building hides the pale horizon and
+// leaves the blue zenith, the light that reaches the point is bluer than the whole sky's
+// (a luminance ratio on the whole sky's irradiance turned a courtyard's shade grey).
 //
-// y: the share of the hemisphere around n (cosine-weighted, each direction by its cell's solid
+// a: the share of the hemisphere around n (cosine-weighted, each direction by its cell's solid
 // angle, dir.w) in which the first surface seen from p along ω_k lies further than `radius`.
 // Indirect light arrives only from surfaces: where p sees the sky (V_k = 1) it gets the sky's
 // light, which x covers, and no bounce; where the first surface lies within `radius` it is
 // nearer than the volume's cells resolve (the volume holds light from beyond it). The volume's
 // blurred 2-band light stands for the rest; 1 without directions.
-fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
+fn sky_terms(s: Surface, radius: f32) -> vec4<f32> {
     let count = u32(sky.header.x);
     let texel = sky.header.y;
     let range = 3.0 * sky.header.z;
-    var lit = 0.0;
-    var seen = 0.0;
+    var lit = vec3<f32>(0.0);
+    var seen = vec3<f32>(0.0);
     var area = 0.0;
     var far = 0.0;
     for (var k = 0u; k < count; k++) {
         let d = sky.dirs[k];
-        let c = dot(s.n, d.cell.xyz);
-        let w = d.cell.w * c;
-        if c <= 0.0 || (w <= 0.0 && radius <= 0.0) {
+        let c = dot(s.n, d.dir.xyz);
+        let w = d.cell.xyz * c;
+        if c <= 0.0 || (all(w <= vec3<f32>(0.0)) && radius <= 0.0) {
             continue;
         }
-        let q = vec4<f32>(s.p + s.ng * receiver_offset(dot(s.ng, d.cell.xyz), texel), 1.0);
+        let q = vec4<f32>(s.p + s.ng * receiver_offset(dot(s.ng, d.dir.xyz), texel), 1.0);
         let clip = d.view_proj * q;
         let uv = vec2<f32>(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
         // Nothing between p and the sky (one texel's depth, in the map's 0..1 range over
         // 3 radii, as a bias).
         let v = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - texel / range);
-        if w > 0.0 {
-            lit += w;
-            seen += w * v;
-        }
+        lit += max(w, vec3<f32>(0.0));
+        seen += max(w, vec3<f32>(0.0)) * v;
         if radius > 0.0 {
             // Nothing nearer to the sky than `radius` from p: where this is 0 a surface lies
             // beyond the radius (comparisons only: depth textures cannot be read as values on
@@ -86,13 +86,13 @@ fn sky_terms(s: Surface, radius: f32) -> vec2<f32> {
             far += wo * (1.0 - within);
         }
     }
-    return vec2<f32>(
-        select(1.0, seen / max(lit, 1e-8), count > 0u && lit > 0.0),
+    return vec4<f32>(
+        select(vec3<f32>(1.0), seen / max(lit, vec3<f32>(1e-8)), lit > vec3<f32>(0.0)),
         select(1.0, far / max(area, 1e-8), area > 0.0),
     );
 }
 
-// The fraction of the sky's irradiance at n that reaches p (`sky_terms`' x).
-fn sky_visibility(s: Surface) -> f32 {
-    return sky_terms(s, 0.0).x;
+// The fraction of the sky's irradiance at n that reaches p, per channel (`sky_terms`' rgb).
+fn sky_visibility(s: Surface) -> vec3<f32> {
+    return sky_terms(s, 0.0).rgb;
 }
