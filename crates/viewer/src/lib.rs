@@ -431,6 +431,8 @@ impl App<'_> {
         true
     }
 
+    /// One frame: advance the clock, render the technique, run the panel, present, and keep
+    /// the statistics (screenshots, the frame limit).
     fn frame(&mut self, event_loop: &ActiveEventLoop) {
         let now = Instant::now();
         let dt = (now - self.last).as_secs_f32();
@@ -439,10 +441,24 @@ impl App<'_> {
         if self.rebuild && !self.rebuild_renderer(event_loop) {
             return;
         }
-        let Some(gfx) = self.gfx.as_mut() else {
+        if !self.render_scene(dt) {
+            return;
+        }
+        let Some(full) = self.run_panel() else {
             return;
         };
-        let (w, h) = (gfx.config.width, gfx.config.height);
+        if !self.present(event_loop, full) {
+            return;
+        }
+        self.finish_frame(event_loop, now, dt);
+    }
+
+    /// Advance the animation clock and motion, set the orbit camera and render the technique
+    /// (or the lens's next aperture samples); false when there is nothing to draw.
+    fn render_scene(&mut self, dt: f32) -> bool {
+        let Some(gfx) = self.gfx.as_mut() else {
+            return false;
+        };
         if self.animate {
             self.clock += dt;
         }
@@ -450,7 +466,7 @@ impl App<'_> {
             self.message = Some(m);
         }
         let Some(renderer) = gfx.renderer.as_mut() else {
-            return;
+            return false;
         };
         let camera = self.orbit.camera();
         let transform = camera.transform;
@@ -464,9 +480,14 @@ impl App<'_> {
             }
             None => self.times = renderer.render(&gfx.ctx),
         }
-        let (rw, rh) = (renderer.settings.width, renderer.settings.height);
+        true
+    }
 
-        // The panel.
+    /// Run the panel (when shown) and apply what was chosen in it; egui's output to draw.
+    fn run_panel(&mut self) -> Option<egui::FullOutput> {
+        let gfx = self.gfx.as_mut()?;
+        let renderer = gfx.renderer.as_ref()?;
+        let (rw, rh) = (renderer.settings.width, renderer.settings.height);
         let raw = gfx.egui.take_egui_input(&gfx.window);
         let mut c = Choices {
             technique: self.technique,
@@ -484,7 +505,7 @@ impl App<'_> {
             header += &format!("\nlens: {done} of {all} aperture samples");
         }
         let show_ui = self.show_ui;
-        let full = gfx.egui.egui_ctx().run_pass(raw, |ctx| {
+        let mut full = gfx.egui.egui_ctx().run_pass(raw, |ctx| {
             if !show_ui {
                 return;
             }
@@ -504,7 +525,6 @@ impl App<'_> {
                     ui.small("WASD QE: move (Shift: fast) · 1–9 technique · H panel · M motion · Esc quit");
                 });
         });
-        let mut full = full;
         gfx.egui
             .handle_platform_output(&gfx.window, std::mem::take(&mut full.platform_output));
         // Texture updates wait in `pending` until a frame is actually drawn.
@@ -522,33 +542,38 @@ impl App<'_> {
             self.orbit = self.home.clone();
         }
         self.want_screenshot |= c.shot;
+        Some(full)
+    }
 
-        // Present.
+    /// Draw the image (tone-mapped) and the panel into the window's next texture and present
+    /// it; false when no frame was drawn (the surface was outdated, lost or busy: a redraw is
+    /// requested; or it failed).
+    fn present(&mut self, event_loop: &ActiveEventLoop, full: egui::FullOutput) -> bool {
+        let Some(gfx) = self.gfx.as_mut() else {
+            return false;
+        };
         let frame = match gfx.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 gfx.surface.configure(&gfx.ctx.device, &gfx.config);
                 gfx.window.request_redraw();
-                return;
+                return false;
             }
             wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
                 gfx.window.request_redraw();
-                return;
+                return false;
             }
             other => {
                 let e = ViewerError::Surface(format!("{other:?}"));
                 self.fail(event_loop, e);
-                return;
+                return false;
             }
         };
+        let (w, h) = (gfx.config.width, gfx.config.height);
         let view = frame.texture.create_view(&Default::default());
         let mut enc = gfx.ctx.device.create_command_encoder(&Default::default());
-        let renderer = gfx.renderer.as_ref().expect("renderer");
-        let (shown, scale) = match &gfx.lens {
-            Some(l) => l.image(),
-            None => (renderer.hdr_view(), 1.0),
-        };
+        let (shown, scale) = shown_image(gfx);
         gfx.display.draw(
             &gfx.ctx,
             &mut enc,
@@ -566,7 +591,12 @@ impl App<'_> {
             .submit(extra.into_iter().chain(std::iter::once(enc.finish())));
         gfx.window.pre_present_notify();
         gfx.ctx.queue.present(frame);
+        true
+    }
 
+    /// After a presented frame: count it, smooth the frame time, take a screenshot when asked
+    /// (or at the end), and exit after the configured number of frames.
+    fn finish_frame(&mut self, event_loop: &ActiveEventLoop, now: Instant, dt: f32) {
         self.stats.frames += 1;
         self.started.get_or_insert(now);
         self.frame_ms = if self.stats.frames == 1 {
@@ -577,10 +607,18 @@ impl App<'_> {
         let done = self.cfg.frames.is_some_and(|n| self.stats.frames >= n);
         if self.want_screenshot || (done && self.cfg.screenshot_at_end) {
             self.want_screenshot = false;
+            let Some(gfx) = self.gfx.as_ref() else {
+                return;
+            };
+            let Some(renderer) = gfx.renderer.as_ref() else {
+                return;
+            };
+            let (shown, scale) = shown_image(gfx);
             let path = self.cfg.screenshot.clone();
             let size = (renderer.settings.width, renderer.settings.height);
             let exposure = self.exposure * scale;
-            match screenshot(&gfx.ctx, shown, size, &path, exposure, self.tone) {
+            let shot = screenshot(&gfx.ctx, shown, size, &path, exposure, self.tone);
+            match shot {
                 Ok(()) => self.stats.screenshots.push(path),
                 Err(source) => {
                     self.fail(event_loop, ViewerError::Screenshot { path, source });
@@ -592,7 +630,24 @@ impl App<'_> {
             event_loop.exit();
             return;
         }
-        gfx.window.request_redraw();
+        if let Some(gfx) = self.gfx.as_ref() {
+            gfx.window.request_redraw();
+        }
+    }
+}
+
+/// The image the window shows (the renderer's, or the lens's accumulation) and the exposure
+/// scale that goes with it.
+fn shown_image(gfx: &Gfx) -> (&wgpu::TextureView, f32) {
+    match &gfx.lens {
+        Some(l) => l.image(),
+        None => (
+            gfx.renderer
+                .as_ref()
+                .expect("a renderer is built before the first frame")
+                .hdr_view(),
+            1.0,
+        ),
     }
 }
 
