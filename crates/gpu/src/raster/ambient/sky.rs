@@ -28,8 +28,8 @@ use wgpu::util::DeviceExt;
 /// overlapping hard polygons, one per cell; more cells make them smaller. `phong-shadow-maps`'
 /// relMSE against the path tracer's direct light (2048 spp; 320 × 240, `--ssaa 2`) with 64 /
 /// 128 / 256 directions: room 0.0032 / 0.0021 / 0.0016, atrium 0.0089 / 0.0068 / 0.0060; the frame on
-/// lavapipe (atrium, 640 × 480 before the 2 × 2 downsample) 1228 / 1592 / 2311 ms against
-/// 928 ms without occlusion. 128 is the first count at which `phong-shadow-maps` reaches
+/// lavapipe (atrium, 640 × 480 before the 2 × 2 downsample) 1114 / 1432 / 1819 ms against
+/// 950 ms without occlusion. 128 is the first count at which `phong-shadow-maps` reaches
 /// `direct`'s error against the reference on room and the atrium (issue 22; docs/phong-and-shadows.md).
 pub const DEFAULT_DIRECTIONS: u32 = 128;
 /// At most this many directions: each is a layer of one depth texture array, and WebGPU's
@@ -45,31 +45,37 @@ const DARK_FLOOR: f64 = 0.1;
 /// Side of each direction's depth map.
 const MAP_SIZE: u32 = 256;
 
-/// Per direction (WGSL `SkyDir`): its view-projection, the unit direction towards the sky (the
-/// cell's flux-weighted mean direction, xyz) with its cell's solid angle (w), and the cell's
-/// E⊥ = Σ L·ΔΩ (RGB; w unused). A surface's weight for the cell is E⊥·⟨n, dir⟩₊ per channel,
-/// the cell's irradiance as one small source.
-/// (Nine SH coefficients per cell, as before, smeared each cell's clamped cosine: 8 % too weak
-/// at 60° from the normal, 0.09 of its peak beyond 90°, which dimmed a room's sky seen through
-/// its window by about 5 %.)
+/// Per direction (WGSL `SkyDir`, 64 bytes): the x, y and z rows of its orthographic
+/// view-projection (an affine map: the fourth row is (0, 0, 0, 1)), and its cell's
+/// E⊥ = Σ L·ΔΩ (RGB) with the cell's solid angle (w). The unit direction towards the sky (the
+/// cell's flux-weighted mean direction) is −z row × the depth range (the projection's depth is
+/// the distance along it over 3 radii). A surface's weight for the cell is E⊥·⟨n, dir⟩₊ per
+/// channel, the cell's irradiance as one small source.
+///
+/// The directions are a uniform buffer, not a storage buffer: they are read by every fragment
+/// in the same order, and on lavapipe the sky term of `phong-shadow-maps` on room (640 × 480,
+/// 128 directions) took 515 ms from storage and 313 ms from a uniform buffer. 64 bytes × 256
+/// fill WebGPU's 16 KiB default limit on a uniform binding exactly; the header (count, texel,
+/// radius) is a binding of its own.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub struct SkyDir {
-    pub view_proj: [[f32; 4]; 4],
-    pub dir: [f32; 4],
+    pub rows: [[f32; 4]; 3],
     pub cell: [f32; 4],
 }
 
 /// Rec. 709 luminance: the weight that places the directions.
 const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 
-/// The occlusion's resources (group 2, bindings 3–5 of the `sky` source).
+/// The occlusion's resources (group 2, bindings 8–10 and 12 of the `sky` and `lpv` sources).
 pub struct SkyOcclusion {
     depth: wgpu::TextureView,
     sampler: wgpu::Sampler,
     data: wgpu::Buffer,
+    header: wgpu::Buffer,
     texture: wgpu::Texture,
-    dirs: Vec<SkyDir>,
+    /// Each direction's view-projection, to render its depth map.
+    view_projs: Vec<Mat4>,
 }
 
 /// `n` unit directions spread evenly over the sphere (spherical Fibonacci points).
@@ -216,14 +222,22 @@ impl SkyOcclusion {
         };
         let cells = env.map_or(vec![], |(img, s)| sky_cells(img, s, &dirs));
         let omega = env.map_or(vec![], |(img, _)| cell_solid_angles(img, &dirs));
+        // Seen along the cell's mean direction, the one its weight is computed for.
+        let view_projs: Vec<Mat4> = cells
+            .iter()
+            .map(|cell| view_proj(cell.0, centre, radius))
+            .collect();
         let data: Vec<SkyDir> = omega
             .iter()
             .zip(&cells)
-            .map(|(&omega, cell)| SkyDir {
-                // Seen along the cell's mean direction, the one its weight is computed for.
-                view_proj: view_proj(cell.0, centre, radius).to_cols_array_2d(),
-                dir: cell.0.extend(omega).to_array(),
-                cell: cell.1.extend(0.0).to_array(),
+            .zip(&view_projs)
+            .map(|((&omega, cell), m)| SkyDir {
+                rows: [
+                    m.row(0).to_array(),
+                    m.row(1).to_array(),
+                    m.row(2).to_array(),
+                ],
+                cell: cell.1.extend(omega).to_array(),
             })
             .collect();
         let device = &ctx.device;
@@ -243,14 +257,11 @@ impl SkyOcclusion {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
-        render_maps(ctx, gscene, &texture, &data);
+        render_maps(ctx, gscene, &texture, &view_projs);
         let header = [directions as f32, 2.0 * radius / size as f32, radius, 0.0];
-        let mut bytes = bytemuck::bytes_of(&header).to_vec();
-        if data.is_empty() {
-            bytes.extend_from_slice(bytemuck::bytes_of(&SkyDir::zeroed()));
-        } else {
-            bytes.extend_from_slice(bytemuck::cast_slice(&data));
-        }
+        // The shader's array holds MAX_DIRECTIONS: a uniform binding has a fixed size.
+        let mut bytes = bytemuck::cast_slice(&data).to_vec();
+        bytes.resize(MAX_DIRECTIONS as usize * std::mem::size_of::<SkyDir>(), 0);
         SkyOcclusion {
             depth: texture.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(wgpu::TextureViewDimension::D2Array),
@@ -266,20 +277,25 @@ impl SkyOcclusion {
             data: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("sky occlusion directions"),
                 contents: &bytes,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::UNIFORM,
+            }),
+            header: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("sky occlusion header"),
+                contents: bytemuck::bytes_of(&header),
+                usage: wgpu::BufferUsages::UNIFORM,
             }),
             texture,
-            dirs: data,
+            view_projs,
         }
     }
 
     /// Render the depth maps again (objects have moved; the directions' frusta keep the
     /// bounds the occlusion was made with).
     pub fn rerender(&self, ctx: &GpuContext, gscene: &GpuScene) {
-        render_maps(ctx, gscene, &self.texture, &self.dirs);
+        render_maps(ctx, gscene, &self.texture, &self.view_projs);
     }
 
-    /// Group 2's entries 8–10 (`sky_occlusion.wgsl`).
+    /// Group 2's entries 8–10 and 12 (`sky_occlusion.wgsl`).
     pub fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
         use super::super::bindings::entry;
         use wgpu::BindingResource as R;
@@ -287,13 +303,14 @@ impl SkyOcclusion {
             entry(8, R::TextureView(&self.depth)),
             entry(9, R::Sampler(&self.sampler)),
             entry(10, self.data.as_entire_binding()),
+            entry(12, self.header.as_entire_binding()),
         ]
     }
 }
 
-/// Group 2's layout entries 8–10 of the `sky` and `lpv` sources.
+/// Group 2's layout entries 8–10 and 12 of the `sky` and `lpv` sources.
 pub fn layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
-    use super::super::bindings::{sampler, storage, texture};
+    use super::super::bindings::{buffer, sampler, texture};
     vec![
         texture(
             8,
@@ -301,7 +318,8 @@ pub fn layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
             wgpu::TextureViewDimension::D2Array,
         ),
         sampler(9, wgpu::SamplerBindingType::Comparison),
-        storage(10),
+        buffer(10, wgpu::BufferBindingType::Uniform, false),
+        buffer(12, wgpu::BufferBindingType::Uniform, false),
     ]
 }
 
@@ -314,7 +332,7 @@ fn vs(@location(0) p: vec3<f32>) -> @builtin(position) vec4<f32> {
 ";
 
 /// One depth pass per direction into layer k (every draw, as opaque, both faces).
-fn render_maps(ctx: &GpuContext, gscene: &GpuScene, texture: &wgpu::Texture, data: &[SkyDir]) {
+fn render_maps(ctx: &GpuContext, gscene: &GpuScene, texture: &wgpu::Texture, view_projs: &[Mat4]) {
     let device = &ctx.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("sky occlusion depth"),
@@ -359,10 +377,10 @@ fn render_maps(ctx: &GpuContext, gscene: &GpuScene, texture: &wgpu::Texture, dat
         cache: None,
     });
     let mut enc = device.create_command_encoder(&Default::default());
-    for (k, d) in data.iter().enumerate() {
+    for (k, m) in view_projs.iter().enumerate() {
         let ubuf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("sky occlusion view"),
-            contents: bytemuck::cast_slice(&d.view_proj),
+            contents: bytemuck::cast_slice(&m.to_cols_array()),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
