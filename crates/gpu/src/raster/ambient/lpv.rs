@@ -1,6 +1,6 @@
 //! The volume source: the light propagation volume (recomputed every frame by its pre-passes)
 //! read trilinearly from its three 3D textures, and the sky's light occluded through the
-//! `sky` source's shadow-mapped directions (bindings 8–10; 17 sampled textures in all, past
+//! `sky` source's shadow-mapped directions (bindings 8–10 and 12; 17 sampled textures in all, past
 //! the 16 of wgpu's default limits, so the device asks for the adapter's).
 
 use super::super::bindings::entry;
