@@ -660,6 +660,26 @@ fn cornell_is_lit_by_its_lamp() {
     );
 }
 
+/// The path tracer's direct light (one scattering event) from the scene's first camera, 64 spp.
+fn traced_direct(scene: &Scene, width: u32, height: u32, seed: u64) -> Image {
+    let accel = Accel::new(scene);
+    PathTracer::new(scene, &accel)
+        .render(
+            &RenderSettings {
+                width,
+                height,
+                spp: 64,
+                max_depth: 1,
+                min_depth: 0,
+                seed,
+                camera: 0,
+                lens: Default::default(),
+            },
+            &|_, _| true,
+        )
+        .unwrap()
+}
+
 /// The sky's light in a closed room lit through a window (issue 22), the sun taken away: the
 /// Phong techniques' SH irradiance occluded through shadow-mapped sky directions against the
 /// path tracer's direct light. Unoccluded, the sky lights the inside through the walls.
@@ -671,22 +691,7 @@ fn the_occluded_sky_matches_the_path_tracer_in_a_closed_room() {
     let mut scene = builtin::builtin("room").unwrap();
     scene.lights.clear();
     let (w, h, ssaa) = (96, 72, 2);
-    let accel = Accel::new(&scene);
-    let reference = PathTracer::new(&scene, &accel)
-        .render(
-            &RenderSettings {
-                width: w,
-                height: h,
-                spp: 64,
-                max_depth: 1,
-                min_depth: 0,
-                seed: 5,
-                camera: 0,
-                lens: Default::default(),
-            },
-            &|_, _| true,
-        )
-        .unwrap();
+    let reference = traced_direct(&scene, w, h, 5);
     let gpu = |sky_occlusion: u32| {
         let mut r = Renderer::new(
             &ctx,
@@ -767,22 +772,7 @@ fn the_occluded_sky_keeps_the_colour_of_what_it_sees() {
         0.6,
     ));
     let (w, h) = (64, 64);
-    let accel = Accel::new(&scene);
-    let traced = PathTracer::new(&scene, &accel)
-        .render(
-            &RenderSettings {
-                width: w,
-                height: h,
-                spp: 64,
-                max_depth: 1,
-                min_depth: 0,
-                seed: 3,
-                camera: 0,
-                lens: Default::default(),
-            },
-            &|_, _| true,
-        )
-        .unwrap();
+    let traced = traced_direct(&scene, w, h, 3);
     let mut r = Renderer::new(
         &ctx,
         &scene,
