@@ -480,22 +480,7 @@ fn background_is_the_environment_as_the_path_tracer_sees_it() {
 
 /// The path tracer's direct light (emission seen + one scattering event) at N×N.
 fn direct_reference(scene: &Scene, spp: u32, seed: u64) -> Image {
-    let accel = Accel::new(scene);
-    PathTracer::new(scene, &accel)
-        .render(
-            &RenderSettings {
-                width: N,
-                height: N,
-                spp,
-                max_depth: 1,
-                min_depth: 0,
-                seed,
-                camera: 0,
-                lens: Default::default(),
-            },
-            &|_, _| true,
-        )
-        .unwrap()
+    traced_direct(scene, N, N, spp, seed)
 }
 
 /// Mean of `img` over the pixels where the reference sees no emitter (its brightest channel
@@ -660,15 +645,16 @@ fn cornell_is_lit_by_its_lamp() {
     );
 }
 
-/// The path tracer's direct light (one scattering event) from the scene's first camera, 64 spp.
-fn traced_direct(scene: &Scene, width: u32, height: u32, seed: u64) -> Image {
+/// The path tracer's direct light (emission seen + one scattering event) from the scene's
+/// first camera.
+fn traced_direct(scene: &Scene, width: u32, height: u32, spp: u32, seed: u64) -> Image {
     let accel = Accel::new(scene);
     PathTracer::new(scene, &accel)
         .render(
             &RenderSettings {
                 width,
                 height,
-                spp: 64,
+                spp,
                 max_depth: 1,
                 min_depth: 0,
                 seed,
@@ -691,7 +677,7 @@ fn the_occluded_sky_matches_the_path_tracer_in_a_closed_room() {
     let mut scene = builtin::builtin("room").unwrap();
     scene.lights.clear();
     let (w, h, ssaa) = (96, 72, 2);
-    let reference = traced_direct(&scene, w, h, 5);
+    let reference = traced_direct(&scene, w, h, 64, 5);
     let gpu = |sky_occlusion: u32| {
         let mut r = Renderer::new(
             &ctx,
@@ -772,7 +758,7 @@ fn the_occluded_sky_keeps_the_colour_of_what_it_sees() {
         0.6,
     ));
     let (w, h) = (64, 64);
-    let traced = traced_direct(&scene, w, h, 3);
+    let traced = traced_direct(&scene, w, h, 64, 3);
     let mut r = Renderer::new(
         &ctx,
         &scene,
