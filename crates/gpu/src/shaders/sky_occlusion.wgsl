@@ -15,7 +15,7 @@ struct SkyDir {
 @group(2) @binding(8) var sky_depth: texture_depth_2d_array;
 @group(2) @binding(9) var sky_cmp: sampler_comparison;
 // The directions, read by every fragment in the same order: a uniform buffer (on lavapipe 40 %
-// less time in the sky's loop than from a storage buffer).
+// less time in the sky's loop than from a storage buffer); 256 = sky.rs `MAX_DIRECTIONS`.
 @group(2) @binding(10) var<uniform> sky_dirs: array<SkyDir, 256>;
 // x: directions (0: no occlusion), y: a map texel in world units, z: the scene's radius.
 @group(2) @binding(12) var<uniform> sky: vec4<f32>;
@@ -47,9 +47,9 @@ fn receiver_offset(cg: f32, texel: f32) -> f32 {
 // (a luminance ratio on the whole sky's irradiance turned a courtyard's shade grey).
 //
 // a: the share of the hemisphere around n (cosine-weighted, each direction by its cell's solid
-// angle, dir.w) in which the first surface seen from p along ω_k lies further than `radius`.
+// angle, cell.w) in which the first surface seen from p along ω_k lies further than `radius`.
 // Indirect light arrives only from surfaces: where p sees the sky (V_k = 1) it gets the sky's
-// light, which x covers, and no bounce; where the first surface lies within `radius` it is
+// light, which rgb covers, and no bounce; where the first surface lies within `radius` it is
 // nearer than the volume's cells resolve (the volume holds light from beyond it). The volume's
 // blurred 2-band light stands for the rest; 1 without directions.
 fn sky_terms(s: Surface, radius: f32) -> vec4<f32> {
@@ -74,8 +74,9 @@ fn sky_terms(s: Surface, radius: f32) -> vec4<f32> {
         // Nothing between p and the sky (one texel's depth, in the map's 0..1 range over
         // 3 radii, as a bias).
         let v = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - texel / range);
-        lit += max(w, vec3<f32>(0.0));
-        seen += max(w, vec3<f32>(0.0)) * v;
+        let wl = max(w, vec3<f32>(0.0));
+        lit += wl;
+        seen += wl * v;
         if radius > 0.0 {
             // Nothing nearer to the sky than `radius` from p: where this is 0 a surface lies
             // beyond the radius (comparisons only: depth textures cannot be read as values on
