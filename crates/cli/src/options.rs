@@ -1245,6 +1245,12 @@ pub struct LpvArgs {
     /// (Kaplanyan & Dachsbacher's original, more diffusive).
     #[arg(long, default_value = "central")]
     pub lpv_reemit: Reemit,
+    /// `lpv` with `--lpv-reemit central`: how sharp the side faces' re-emitted lobe is, as its
+    /// band-1 weight relative to a delta's: 0.667 is Kaplanyan & Dachsbacher's cosine lobe,
+    /// values towards 1 keep the light's direction (the light crossing a face is a narrow
+    /// cone) and pile less of it up near its source; within 0..=1.
+    #[arg(long, default_value_t = lightlab_core::lpv::DEFAULT_REEMIT_LOBE)]
+    pub lpv_reemit_lobe: f32,
     /// `lpv`: what the geometry volume does with the light it blocks: `multiple` reflects it
     /// × the surfaces' albedo, so light keeps bouncing while it propagates (the default);
     /// `single` absorbs it (one bounce, Kaplanyan & Dachsbacher's default).
@@ -1277,6 +1283,7 @@ impl Default for LpvArgs {
             lpv_cascades: 1,
             no_lpv_snap: false,
             lpv_reemit: Reemit::Central,
+            lpv_reemit_lobe: lightlab_core::lpv::DEFAULT_REEMIT_LOBE,
             lpv_bounces: Bounces::Multiple,
             no_lpv_near_occlusion: false,
             lpv_sky_lights: lightlab_gpu::lpv::DEFAULT_SKY_LIGHTS,
@@ -1308,6 +1315,7 @@ impl LpvArgs {
             cascades: self.lpv_cascades,
             snap: !self.no_lpv_snap,
             reemit: self.lpv_reemit,
+            reemit_lobe: self.lpv_reemit_lobe,
             bounces: self.lpv_bounces,
             near_occlusion: !self.no_lpv_near_occlusion,
             // The report lights its volume with the sun only (its sky is a composite term).

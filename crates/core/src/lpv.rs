@@ -374,14 +374,26 @@ impl Occlusion {
     }
 
     /// Transmittance of light travelling along `dir` through the face between light cell `c`
-    /// and its neighbour `c + axis`: 1 − B(−dir), B averaged over the face's four corners.
+    /// and its neighbour `c + axis`: 1 − max(B(−dir), B(dir)), B summed over the face's four
+    /// corners and divided by four.
+    ///
+    /// Surfaces block from both sides. Kaplanyan & Dachsbacher's blocker is the clamped cosine
+    /// of the surfel's normal, B(−dir), which stops light arriving on a surface's front and
+    /// lets through light arriving on its back. A wall that only the sun saw from outside then
+    /// let the room's light out, and a wall that only the camera saw from inside let the sky's
+    /// light in. Reading the blocker from both sides closes walls either way (its effect on
+    /// the demo's scenes: docs/lpv.md, *Measured*).
     pub fn transmittance(&self, c: IVec3, axis: IVec3, dir: Vec3) -> f32 {
-        let b: f32 = self
-            .face_corners(c, axis)
-            .iter()
-            .map(|&g| eval(&self.cells[g], -dir))
-            .sum();
-        1.0 - (0.25 * b).clamp(0.0, 1.0)
+        let (front, back) =
+            self.face_corners(c, axis)
+                .iter()
+                .fold((0.0f32, 0.0f32), |(f, b), &g| {
+                    (
+                        f + eval(&self.cells[g], -dir),
+                        b + eval(&self.cells[g], dir),
+                    )
+                });
+        1.0 - (0.25 * front.max(back)).clamp(0.0, 1.0)
     }
 
     /// The mean albedo of the surfaces at the face between light cell `c` and `c + axis`
@@ -457,20 +469,41 @@ crate::named_enum!(Bounces, "bounce mode", {
     Multiple => "multiple",
 });
 
+/// The re-emission lobe's band-1 weight, relative to a delta's, of Kaplanyan's clamped cosine
+/// (its 2-band projection is (Y₀₀, ⅔·C₁·n) per unit flux).
+pub const COSINE_LOBE: f32 = 2.0 / 3.0;
+
+/// lightlab's default re-emission lobe for [`Reemit::Central`]'s side faces (see
+/// [`reemission_lobe`]): between Kaplanyan's cosine (⅔, too diffusive) and the 2-band
+/// projection of the narrow cone of light that crosses a side face (its mean cosine, 0.97;
+/// at 1 the lobes' negative back halves grow until a closed room loses its light). Chosen over
+/// the four demo scenes (docs/lpv.md, *Measured*).
+pub const DEFAULT_REEMIT_LOBE: f32 = 0.85;
+
+/// A unit-flux lobe around `axis` whose band-1 weight is `lobe` times a delta's: [`COSINE_LOBE`]
+/// gives cosine_lobe(axis)/π; larger values keep the light's direction better.
+pub fn reemission_lobe(axis: Vec3, lobe: f32) -> Sh4 {
+    let k = lobe * C1;
+    [Y00, k * axis.y, k * axis.z, k * axis.x]
+}
+
 /// One propagation step (Kaplanyan's 6-face scheme, the side faces' light re-emitted as
-/// `reemit` says): returns only the newly arrived light. With an occlusion volume, light
+/// `reemit` says, with [`Reemit::Central`] as a lobe of band-1 weight `lobe`, see
+/// [`reemission_lobe`]): returns only the newly arrived light. With an occlusion volume, light
 /// crossing into the receiving cell is attenuated by its transmittance, and with
 /// [`Bounces::Multiple`] what the face blocks is reflected ([`reflected`]).
 pub fn propagate_step(
     src: &Volume,
     occlusion: Option<&Occlusion>,
     reemit: Reemit,
+    lobe: f32,
     bounces: Bounces,
 ) -> Volume {
     let g = src.grid;
     // Per axis d, the receiving cell's 5 faces: the direction from the source centre to the
-    // face centre, and the cosine lobe (around the face normal, or that direction) scaled by
-    // ΔΩ/π.
+    // face centre, and the re-emitted unit-flux lobe scaled by ΔΩ: the far face's a cosine
+    // lobe along d; a side face's a cosine lobe around its normal (`FaceNormal`) or a lobe of
+    // weight `lobe` along that direction (`Central`).
     let faces: [[(Vec3, Sh4); 5]; 6] = AXES.map(|d| {
         let dv = d.as_vec3();
         let mut f = [(
@@ -481,12 +514,11 @@ pub fn propagate_step(
         for (k, side) in sides.enumerate() {
             let sv = side.as_vec3();
             let w = (dv + 0.5 * sv).normalize();
-            let axis = match reemit {
-                Reemit::FaceNormal => sv,
-                Reemit::Central => w,
+            let shape = match reemit {
+                Reemit::FaceNormal => reemission_lobe(sv, COSINE_LOBE),
+                Reemit::Central => reemission_lobe(w, lobe),
             };
-            let lobe = scaled(&cosine_lobe(axis), SOLID_ANGLE_SIDE / std::f32::consts::PI);
-            f[k + 1] = (w, lobe);
+            f[k + 1] = (w, scaled(&shape, SOLID_ANGLE_SIDE));
         }
         f
     });
@@ -561,13 +593,14 @@ pub fn propagate(
     occlusion: Option<&Occlusion>,
     iterations: u32,
     reemit: Reemit,
+    lobe: f32,
     bounces: Bounces,
 ) -> Volume {
     let mut acc = seed.clone();
     let mut cur = seed.clone();
     for i in 0..iterations {
         let occ = if i == 0 { None } else { occlusion };
-        cur = propagate_step(&cur, occ, reemit, bounces);
+        cur = propagate_step(&cur, occ, reemit, lobe, bounces);
         acc.accumulate(&cur);
     }
     acc
@@ -716,15 +749,22 @@ mod tests {
             );
             let f0 = seed.total_flux();
             assert!((f0 - vpl.flux).abs().max_element() < 1e-5, "{f0}");
-            for reemit in [Reemit::FaceNormal, Reemit::Central] {
+            // Any lobe carries its unit flux in the constant term: the step conserves flux
+            // whatever the re-emission.
+            for (reemit, lobe) in [
+                (Reemit::FaceNormal, COSINE_LOBE),
+                (Reemit::Central, COSINE_LOBE),
+                (Reemit::Central, DEFAULT_REEMIT_LOBE),
+                (Reemit::Central, 1.0),
+            ] {
                 let mut cur = seed.clone();
                 for it in 0..6 {
-                    cur = propagate_step(&cur, None, reemit, Bounces::Single);
+                    cur = propagate_step(&cur, None, reemit, lobe, Bounces::Single);
                     let f = cur.total_flux();
                     let err = ((f - vpl.flux) / vpl.flux).abs().max_element();
                     assert!(
                         err < 0.01,
-                        "{reemit:?}, iteration {it}: {f} vs {}",
+                        "{reemit:?} {lobe}, iteration {it}: {f} vs {}",
                         vpl.flux
                     );
                 }
@@ -773,9 +813,10 @@ mod tests {
         let f0 = v.total_flux().x;
         let wpi = propagate_step_wpi(&propagate_step_wpi(&v)).total_flux().x;
         let six = propagate_step(
-            &propagate_step(&v, None, Reemit::FaceNormal, Bounces::Single),
+            &propagate_step(&v, None, Reemit::FaceNormal, COSINE_LOBE, Bounces::Single),
             None,
             Reemit::FaceNormal,
+            COSINE_LOBE,
             Bounces::Single,
         )
         .total_flux()
@@ -831,16 +872,20 @@ mod tests {
     }
 
     #[test]
-    fn a_wall_of_blockers_stops_light() {
+    fn a_wall_of_blockers_stops_light_from_both_sides() {
         // A plane of surfels at x = 5 facing −x fills the geometry cells there; light
-        // travelling +x from x < 5 is stopped, light behind the plane is not affected.
+        // travelling +x from x < 5 is stopped, and so is light from behind the plane (a
+        // surface is opaque from both sides, though the RSM saw only one).
         let g = grid(10);
         let occ = Occlusion::inject(g, &wall_at_x5(Vec3::splat(0.5)));
         let c = IVec3::new(4, 5, 5);
         let t_in = occ.transmittance(c, IVec3::X, Vec3::X);
         assert!(t_in < 0.05, "{t_in}");
         let t_back = occ.transmittance(IVec3::new(5, 5, 5), -IVec3::X, -Vec3::X);
-        assert!(t_back > 0.99, "{t_back}");
+        assert!(t_back < 0.05, "{t_back}");
+        // Light travelling along the wall crosses faces the wall does not lie in.
+        let along = occ.transmittance(IVec3::new(2, 5, 5), IVec3::Y, Vec3::Y);
+        assert_eq!(along, 1.0);
         // Elsewhere the volume is clear.
         assert_eq!(
             occ.transmittance(IVec3::new(2, 5, 5), IVec3::X, Vec3::X),
@@ -863,7 +908,13 @@ mod tests {
         let lobe = scaled(&cosine_lobe(Vec3::X), 1.0 / std::f32::consts::PI);
         v.cells[g.index(c)] = [lobe; 3];
         let k = 4.0 * std::f32::consts::PI * Y00;
-        let free = propagate_step(&v, None, Reemit::Central, Bounces::Single);
+        let free = propagate_step(
+            &v,
+            None,
+            Reemit::Central,
+            DEFAULT_REEMIT_LOBE,
+            Bounces::Single,
+        );
         assert!(1.0 - occ.transmittance(c, IVec3::X, Vec3::X) > 0.95);
         // Σ over the six faces of blocked × sent (the wall's corners touch the side faces too:
         // a 2-band blocker's constant term blocks a little in every direction).
@@ -874,8 +925,20 @@ mod tests {
                 blocked * free.at(c + *d)[0][0] * k
             })
             .sum();
-        let single = propagate_step(&v, Some(&occ), Reemit::Central, Bounces::Single);
-        let multi = propagate_step(&v, Some(&occ), Reemit::Central, Bounces::Multiple);
+        let single = propagate_step(
+            &v,
+            Some(&occ),
+            Reemit::Central,
+            DEFAULT_REEMIT_LOBE,
+            Bounces::Single,
+        );
+        let multi = propagate_step(
+            &v,
+            Some(&occ),
+            Reemit::Central,
+            DEFAULT_REEMIT_LOBE,
+            Bounces::Multiple,
+        );
         let back = multi.at(c);
         for (ch, rho) in [0.5f32, 0.25, 0.0].into_iter().enumerate() {
             let want = rho * lost;
@@ -931,6 +994,7 @@ mod tests {
             None,
             8,
             Reemit::FaceNormal,
+            COSINE_LOBE,
             Bounces::Single,
         );
         let p = Vec3::new(8.0, 2.0, 8.0);
@@ -948,6 +1012,7 @@ mod tests {
             None,
             8,
             Reemit::FaceNormal,
+            COSINE_LOBE,
             Bounces::Single,
         );
         let plain = other.irradiance(p, Vec3::Y).x;
@@ -1023,12 +1088,12 @@ mod tests {
             flux: Vec3::ONE,
         };
         let seed = inject(g, &[vpl]);
-        let run = |reemit: Reemit| {
+        let run = |reemit: Reemit, lobe: f32| {
             let mut cur = seed.clone();
             let mut acc = seed.clone();
             let mut radius = vec![];
             for _ in 0..16 {
-                cur = propagate_step(&cur, None, reemit, Bounces::Single);
+                cur = propagate_step(&cur, None, reemit, lobe, Bounces::Single);
                 acc.accumulate(&cur);
                 let (mut m, mut w) = (0.0f64, 0.0f64);
                 for c in g.cells() {
@@ -1046,13 +1111,13 @@ mod tests {
             };
             let r = [ratio(2), ratio(4), ratio(8)];
             eprintln!(
-                "{reemit:?}: mean distance of the flux after 1, 4, 9, 16 steps: {:.2} {:.2} {:.2} \
+                "{reemit:?} {lobe:.2}: mean distance of the flux after 1, 4, 9, 16 steps: {:.2} {:.2} {:.2} \
                  {:.2}; E·πr²/Φ straight above at 2, 4, 8 cells: {:.3} {:.3} {:.3} (exact: 1)",
                 radius[0], radius[3], radius[8], radius[15], r[0], r[1], r[2]
             );
             (radius, r)
         };
-        let (radius, r) = run(Reemit::FaceNormal);
+        let (radius, r) = run(Reemit::FaceNormal, COSINE_LOBE);
         // Free streaming would put it at t cells; diffusion at ∝ √t.
         assert!(
             radius[15] < 6.0 && radius[15] > 2.0 * radius[0],
@@ -1060,9 +1125,23 @@ mod tests {
         );
         assert!(r[0] > 0.5 && r[2] < 0.4 * r[0], "{r:?}");
         // Measured: 4.23 cells after 16 steps and 0.08 at 8 cells (face normal) against 7.41
-        // and 0.88 (central).
-        let (central, rc) = run(Reemit::Central);
+        // and 0.88 (central, cosine lobes); a sharper lobe carries light further still.
+        let (central, rc) = run(Reemit::Central, COSINE_LOBE);
         assert!(central[15] > 1.5 * radius[15], "{central:?}");
         assert!(rc[2] > 5.0 * r[2] && rc[2] > 0.6, "{rc:?}");
+        let (sharp, rs) = run(Reemit::Central, DEFAULT_REEMIT_LOBE);
+        assert!(sharp[15] > central[15], "{sharp:?}");
+        assert!(rs[2] > rc[2], "{rs:?}");
+    }
+
+    #[test]
+    fn the_cosine_reemission_lobe_is_kaplanyans() {
+        for axis in [Vec3::X, Vec3::new(0.48, -0.6, 0.64)] {
+            let a = reemission_lobe(axis, COSINE_LOBE);
+            let b = scaled(&cosine_lobe(axis), 1.0 / std::f32::consts::PI);
+            for k in 0..4 {
+                assert!((a[k] - b[k]).abs() < 1e-6, "{a:?} vs {b:?}");
+            }
+        }
     }
 }

@@ -89,6 +89,10 @@ pub struct LpvSettings {
     /// `Central` (default) keeps its direction, `FaceNormal` is Kaplanyan & Dachsbacher's
     /// original (see `lightlab_core::lpv::Reemit`).
     pub reemit: lpv::Reemit,
+    /// With `Reemit::Central`, the side faces' re-emitted lobe: its band-1 weight relative to
+    /// a delta's, ⅔ for Kaplanyan's cosine lobe, more to keep the light's direction
+    /// (`lightlab_core::lpv::reemission_lobe`; default `DEFAULT_REEMIT_LOBE`).
+    pub reemit_lobe: f32,
     /// Whether light the geometry volume blocks is absorbed (`Single`: one bounce) or
     /// reflected × the blocking surfaces' albedo (`Multiple`, the default; Kaplanyan only,
     /// with `occlusion`; see `lightlab_core::lpv::Bounces`).
@@ -134,6 +138,7 @@ impl Default for LpvSettings {
             camera_blockers: true,
             anchor: None,
             reemit: lpv::Reemit::Central,
+            reemit_lobe: lpv::DEFAULT_REEMIT_LOBE,
             bounces: lpv::Bounces::Multiple,
             near_occlusion: true,
             sky_lights: DEFAULT_SKY_LIGHTS,
@@ -207,12 +212,20 @@ impl LpvSettings {
                 "lpv-faithful has a single volume (the report's); cascades need lpv".into(),
             );
         }
-        if self.reemit != lpv::Reemit::Central && self.scheme == LpvScheme::Wpi {
+        let reemission =
+            self.reemit != lpv::Reemit::Central || self.reemit_lobe != lpv::DEFAULT_REEMIT_LOBE;
+        if reemission && self.scheme == LpvScheme::Wpi {
             return Err(
                 "lpv-faithful propagates with the report's 18-neighbour kernel; the re-emission \
                  of the 6-face scheme applies to lpv"
                     .into(),
             );
+        }
+        if !(self.reemit_lobe.is_finite() && (0.0..=1.0).contains(&self.reemit_lobe)) {
+            return Err(format!(
+                "LPV re-emission lobe {} must be within 0..=1 (⅔: a cosine lobe, 1: a delta)",
+                self.reemit_lobe
+            ));
         }
         if !(self.margin.is_finite() && (0.0..=self.grid as f32 / 4.0).contains(&self.margin)) {
             return Err("LPV margin must be within 0..=grid/4 cells".into());
@@ -263,7 +276,8 @@ pub struct LpvUniforms {
     /// direction (`lightlab_core::lpv::Reemit`).
     pub reemit: u32,
     pub bounces: u32,
-    pub pad2: u32,
+    /// `reemit` = 1: the side faces' lobe (`lightlab_core::lpv::reemission_lobe`).
+    pub lobe: f32,
     /// Wind sway (lightlab_core::wind::Wind::uniform), the same as the camera passes'.
     pub wind_a: [f32; 4],
     pub wind_b: [f32; 4],
@@ -956,7 +970,7 @@ mod tests {
                 layer,
                 reemit,
                 bounces,
-                pad2,
+                lobe,
                 wind_a,
                 wind_b
             ),

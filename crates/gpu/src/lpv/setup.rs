@@ -30,6 +30,7 @@ pub(super) fn uniform_slots(
         occlusion: gv_on as u32,
         reemit: (settings.reemit == lpv::Reemit::Central) as u32,
         bounces: (settings.bounces == lpv::Bounces::Multiple) as u32,
+        lobe: settings.reemit_lobe,
         wind_a: wind.uniform()[0],
         wind_b: wind.uniform()[1],
         ..Default::default()

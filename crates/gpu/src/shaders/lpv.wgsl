@@ -39,7 +39,9 @@ struct LpvUniforms {
     reemit: u32,
     // 1: light the geometry volume blocks is reflected × its albedo (multiple bounces).
     bounces: u32,
-    pad2: u32,
+    // reemit = 1: the side faces' lobe's band-1 weight relative to a delta's (⅔: a cosine
+    // lobe; lightlab_core::lpv::reemission_lobe).
+    lobe: f32,
     // Wind sway, as FrameUniforms.
     wind_a: vec4<f32>,
     wind_b: vec4<f32>,
@@ -177,6 +179,12 @@ fn sh_basis(d: vec3<f32>) -> vec4<f32> {
 
 fn cosine_lobe(n: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(LOBE0, LOBE1 * n.y, LOBE1 * n.z, LOBE1 * n.x);
+}
+
+// A unit-flux lobe around `axis` whose band-1 weight is k times a delta's
+// (lightlab_core::lpv::reemission_lobe).
+fn reemission_lobe(axis: vec3<f32>, k: f32) -> vec4<f32> {
+    return vec4<f32>(Y00, k * C1 * axis.y, k * C1 * axis.z, k * C1 * axis.x);
 }
 
 fn cell_index(c: vec3<i32>, n: i32) -> i32 {
@@ -358,15 +366,20 @@ fn face_corners(c: vec3<i32>, axis: vec3<i32>) -> array<i32, 4> {
 }
 
 // Transmittance of light travelling along `dir` through the face between cell c and c + axis:
-// 1 − B(−dir), B averaged over the face's four corners of the geometry volume.
+// 1 − max(B(−dir), B(dir)), B summed over the face's four corners of the geometry volume and
+// divided by four: surfaces block from both sides (lightlab_core::lpv::Occlusion::transmittance).
 fn transmittance(c: vec3<i32>, axis: vec3<i32>, dir: vec3<f32>) -> f32 {
     let g = face_corners(c, axis);
-    let y = sh_basis(-dir);
-    var b = 0.0;
+    let y_front = sh_basis(-dir);
+    let y_back = sh_basis(dir);
+    var front = 0.0;
+    var back = 0.0;
     for (var k = 0; k < 4; k++) {
-        b += dot(gv[2 * g[k]], y);
+        let b = gv[2 * g[k]];
+        front += dot(b, y_front);
+        back += dot(b, y_back);
     }
-    return 1.0 - clamp(0.25 * b, 0.0, 1.0);
+    return 1.0 - clamp(0.25 * max(front, back), 0.0, 1.0);
 }
 
 // The mean albedo of the surfaces at that face (0 where there are none).
@@ -460,7 +473,8 @@ fn propagate_cs(@builtin(global_invocation_id) id: vec3<u32>) {
             let sv = vec3<f32>(axis_of(j));
             let w = normalize(dv + 0.5 * sv);
             let y = sh_basis(w);
-            let l = cosine_lobe(select(sv, w, lpv.reemit == 1u)) * (t * SOLID_SIDE / PI);
+            let shape = select(cosine_lobe(sv) / PI, reemission_lobe(w, lpv.lobe), lpv.reemit == 1u);
+            let l = shape * (t * SOLID_SIDE);
             for (var ch = 0; ch < 3; ch++) {
                 acc[ch] += l * dot(source[ch], y);
             }
