@@ -1111,8 +1111,9 @@ mod tests {
             };
             let r = [ratio(2), ratio(4), ratio(8)];
             eprintln!(
-                "{reemit:?} {lobe:.2}: mean distance of the flux after 1, 4, 9, 16 steps: {:.2} {:.2} {:.2} \
-                 {:.2}; E·πr²/Φ straight above at 2, 4, 8 cells: {:.3} {:.3} {:.3} (exact: 1)",
+                "{reemit:?} {lobe:.2}: mean distance of the flux after 1, 4, 9, 16 steps: \
+                 {:.2} {:.2} {:.2} {:.2}; E·πr²/Φ straight above at 2, 4, 8 cells: {:.3} {:.3} \
+                 {:.3} (exact: 1)",
                 radius[0], radius[3], radius[8], radius[15], r[0], r[1], r[2]
             );
             (radius, r)
