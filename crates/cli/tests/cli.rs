@@ -1524,12 +1524,13 @@ fn lpv_techniques_render_and_reject_bad_options() {
     assert!(o.status.success(), "{}", stderr(&o));
     std::fs::remove_file(&out).unwrap();
     // Options of other techniques are refused, not ignored.
-    let refused: [&[&str]; 5] = [
+    let refused: [&[&str]; 6] = [
         &["phong", "--debug-view", "indirect"],
         &["lpv", "--indirect-only"],
         &["phong-shadow-maps", "--bounces", "2"],
         &["lightmap", "--no-area-lights"],
         &["lpv-faithful", "--lpv-reemit", "face"],
+        &["lpv-faithful", "--lpv-reemit-lobe", "0.7"],
     ];
     for args in refused {
         let mut v = vec!["render", "--scene", "cornell", "--technique"];
@@ -1552,6 +1553,7 @@ fn lpv_techniques_render_and_reject_bad_options() {
         ["--rsm-size", "8"],
         ["--lpv-cascades", "5"],
         ["--lpv-damping", "9"],
+        ["--lpv-reemit-lobe", "1.5"],
     ] {
         let o = lightlab(&[
             "render",
