@@ -257,3 +257,164 @@ fn wind_sways_the_camera_view_the_shadow_map_and_the_reflective_shadow_map_alike
         "the breeze moves leaves: {rsm_rest}"
     );
 }
+
+/// A 2 m leaf (transmission 0.6) at 1 m, seen from below, under a sky of radiance 1 above the
+/// horizon and 0.05 below; with `roof`, an opaque 1.2 m square 0.3 m above the leaf.
+fn leaf_under_the_sky(roof: bool) -> Scene {
+    let mut s = Scene::default();
+    let leaf = s.add_material(Material {
+        name: "leaf".into(),
+        base_color: Vec4::new(0.4, 0.7, 0.3, 1.0),
+        roughness: 1.0,
+        specular: 0.0,
+        double_sided: true,
+        transmission: 0.6,
+        brdf: BrdfModel::Lambert,
+        ..Default::default()
+    });
+    let at = |y: f32, r: f32| {
+        [
+            Vec3::new(-r, y, r),
+            Vec3::new(r, y, r),
+            Vec3::new(r, y, -r),
+            Vec3::new(-r, y, -r),
+        ]
+    };
+    s.add_mesh(quad("leaf", at(1.0, 1.0), leaf), Mat4::IDENTITY);
+    if roof {
+        let grey = s.add_material(Material::diffuse("roof", Vec3::splat(0.5)));
+        s.add_mesh(quad("roof", at(1.3, 0.6), grey), Mat4::IDENTITY);
+    }
+    let (w, h) = (64u32, 32u32);
+    s.environment = Some(lightlab_scene::Environment {
+        image: Image::from_fn(w, h, |_, y| Vec3::splat(if y < h / 2 { 1.0 } else { 0.05 })),
+        intensity: 1.0,
+    });
+    s.cameras.push(Camera::look_at(
+        "below",
+        Vec3::new(0.0, 0.2, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::Z,
+        0.8,
+    ));
+    s
+}
+
+/// The sky behind a thin translucent leaf lights it through its back (issue 22, foliage), and
+/// what hides that sky hides its light: the occluded sky term against the path tracer's direct
+/// light, with and without a roof over the leaf. (The sky term once lit leaves by their front
+/// only, with the whole albedo: 0.08 of the traced light here.)
+#[test]
+fn the_sky_lights_a_leaf_through_its_back_where_nothing_hides_it() {
+    let Some(ctx) = test_context() else { return };
+    let mut means = vec![];
+    for roof in [false, true] {
+        let scene = leaf_under_the_sky(roof);
+        let accel = Accel::new(&scene);
+        let settings = RenderSettings {
+            width: 32,
+            height: 32,
+            spp: 256,
+            max_depth: 1,
+            min_depth: 0,
+            seed: 7,
+            camera: 0,
+            lens: Default::default(),
+        };
+        let traced = PathTracer::new(&scene, &accel)
+            .render(&settings, &|_, _| true)
+            .unwrap();
+        let mut r = Renderer::new(
+            &ctx,
+            &scene,
+            RasterSettings {
+                width: 64,
+                height: 64,
+                shadows: ShadowMethod::Map,
+                ambient: Ambient::Environment,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        r.render(&ctx);
+        let gpu = r.read_hdr(&ctx).unwrap().downsample(2);
+        let mean = |i: &Image| i.data.iter().map(|p| p.y as f64).sum::<f64>() / i.data.len() as f64;
+        let (g, t) = (mean(&gpu), mean(&traced));
+        eprintln!(
+            "leaf under the sky, roof {roof}: GPU {g:.4}, traced {t:.4}, ratio {:.3}",
+            g / t
+        );
+        assert!(
+            (g / t - 1.0).abs() < 0.08,
+            "roof {roof}: GPU {g}, traced {t}"
+        );
+        means.push(t);
+    }
+    // The roof hides most of the sky behind the leaf.
+    assert!(means[1] < 0.6 * means[0], "{means:?}");
+}
+
+/// Inside the bush's canopy, leaves a few centimetres apart hide the sky from each other: the
+/// occluded sky on the canopy against the path tracer's direct sky light (the sun taken away).
+/// Its shadow-mapped directions see past what lies within their bias of a point: with a bias
+/// of a texel at 256² (and the leaves' whole albedo for the light on their front) the inner
+/// canopy took 2.0 times the traced light; 1.21 now.
+#[test]
+fn the_occluded_sky_darkens_the_inside_of_a_canopy() {
+    let Some(ctx) = test_context() else { return };
+    let mut scene = lightlab_scene::builtin::builtin("bush").unwrap();
+    scene.lights.clear();
+    let (w, h) = (80u32, 60u32);
+    let accel = Accel::new(&scene);
+    let settings = RenderSettings {
+        width: w,
+        height: h,
+        spp: 64,
+        max_depth: 1,
+        min_depth: 0,
+        seed: 3,
+        camera: 0,
+        lens: Default::default(),
+    };
+    let traced = PathTracer::new(&scene, &accel)
+        .render(&settings, &|_, _| true)
+        .unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        RasterSettings {
+            width: w * 2,
+            height: h * 2,
+            shadows: ShadowMethod::Map,
+            ambient: Ambient::Environment,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    r.render(&ctx);
+    let gpu = r.read_hdr(&ctx).unwrap().downsample(2);
+    // The canopy's inner part: an ellipse around its centre in the default view.
+    let (cx, cy, rx, ry) = (
+        0.494 * w as f32,
+        0.31 * h as f32,
+        0.18 * w as f32,
+        0.17 * h as f32,
+    );
+    let (mut g, mut t, mut n) = (0.0f64, 0.0f64, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let (dx, dy) = ((x as f32 + 0.5 - cx) / rx, (y as f32 + 0.5 - cy) / ry);
+            if dx * dx + dy * dy < 1.0 {
+                g += gpu.get(x, y).y as f64;
+                t += traced.get(x, y).y as f64;
+                n += 1;
+            }
+        }
+    }
+    eprintln!(
+        "canopy's inside ({n} pixels): GPU / traced sky light {:.3}",
+        g / t
+    );
+    assert!(n > 200, "{n}");
+    assert!((g / t - 1.0).abs() < 0.3, "GPU {g}, traced {t}");
+}

@@ -177,9 +177,9 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     // The sky's visibility and the share of the hemisphere the volume's light comes from (the
     // surfaces beyond the lookup's reach), in one pass.
     let sky_t = sky_terms(s, lpv_u.occlusion_radius);
-    let indirect = s.diffuse / PI * e * sky_t.a;
+    let indirect = s.diffuse / PI * e * sky_t.far;
     if lpv_u.indirect_only == 1u {
         return indirect;
     }
-    return indirect + sky_ambient(s) * sky_t.rgb + emission(in);
+    return indirect + sky_light(s, sky_t) + emission(in);
 }

@@ -6,5 +6,5 @@ fn source_vertex(p: vec3<f32>, vi: u32, ii: u32) -> vec3<f32> {
 }
 
 fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
-    return sky_ambient(s) * sky_visibility(s) + emission(in);
+    return sky_light(s, sky_terms(s, 0.0)) + emission(in);
 }

@@ -267,21 +267,19 @@ fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     return select(own, field.rgb, env_radiance_field(in.instance));
 }
 
-// The environment's unshadowed irradiance on the diffuse surface: from its SH coefficients
-// (frame.ambient_sh), or the irradiance map (`--env-diffuse map`, env.wgsl).
-fn sky_ambient(s: Surface) -> vec3<f32> {
-    var out = vec3<f32>(0.0);
+// The environment's unshadowed irradiance over π arriving around n (what a white Lambertian
+// surface facing n sends back): from its SH coefficients (frame.ambient_sh), or the irradiance
+// map (`--env-diffuse map`, env.wgsl).
+fn sky_irradiance(n: vec3<f32>) -> vec3<f32> {
     if env_u.irradiance_layer != 0xffffffffu {
-        out = s.diffuse * env_irradiance(s.n);
-    } else {
-        let y = sh9(s.n);
-        var e = vec3<f32>(0.0);
-        for (var k = 0u; k < 9u; k++) {
-            e += frame.ambient_sh[k].xyz * y[k];
-        }
-        out = s.diffuse / PI * max(e, vec3<f32>(0.0));
+        return env_irradiance(n);
     }
-    return out;
+    let y = sh9(n);
+    var e = vec3<f32>(0.0);
+    for (var k = 0u; k < 9u; k++) {
+        e += frame.ambient_sh[k].xyz * y[k];
+    }
+    return max(e, vec3<f32>(0.0)) / PI;
 }
 
 // ---- shadow maps -------------------------------------------------------------------------------

@@ -20,61 +20,91 @@ struct SkyDir {
 // x: directions (0: no occlusion), y: a map texel in world units, z: the scene's radius.
 @group(2) @binding(12) var<uniform> sky: vec4<f32>;
 
-// How far [m] along ng a point moves before its depth comparison with a map looking along a
-// direction at cos θ = cg to ng, `texel` the map's texel [m]. The bilinear comparison reads
-// texels up to one texel across, where the surface lies texel·tan θ deeper; the comparison's
-// own bias is one texel of depth, so the point must rise by texel·(tan θ − 1) towards the
-// map: an offset δ along ng gains δ·cos θ, so δ = texel·(sin θ − cos θ)/cos²θ (0 up to 45°,
-// capped at two texels from 65° on, where the cosine weight is small). A constant offset of
-// two texels (before) opened the gaps of a dense canopy to the sky. GPU test
-// `the_occluded_sky_leaves_convex_objects_unshadowed` holds it to no acne; figures in
-// docs/phong-and-shadows.md.
-fn receiver_offset(cg: f32, texel: f32) -> f32 {
+// How a point at cos θ = cg to a map's direction moves ahead of its own surface before the
+// depth comparison, `texel` the map's texel [m]: (offset along ng, depth bias), both in metres.
+// The bilinear comparison reads the map's texels up to one texel across, where the surface
+// lies up to texel·tan θ nearer the map than the point.
+// - The depth bias covers that up to 45°: texel·(min(tan θ, 1) + 0.1), the 0.1 for the
+//   rasteriser's and the interpolated position's rounding. Only as deep as the slope needs: a
+//   point sees past every occluder within the bias of it, and in the bush's canopy, leaves a
+//   few centimetres apart, a constant bias of one texel let in 1.19 times the sky light of the
+//   path tracer, 1.17 with this one (512² maps).
+// - Beyond 45° the point rises by the rest, texel·(tan θ − 1): an offset δ along ng gains
+//   δ·cos θ, so δ = texel·(sin θ − cos θ)/cos²θ, capped at two texels from 65° on, where the
+//   cosine weight is small. A constant offset of two texels (before) opened the gaps of a
+//   dense canopy to the sky.
+// GPU test `the_occluded_sky_leaves_convex_objects_unshadowed` holds both to no acne; figures
+// in docs/phong-and-shadows.md.
+fn receiver_shift(cg: f32, texel: f32) -> vec2<f32> {
     let c = clamp(abs(cg), 0.0, 1.0);
     let sn = sqrt(1.0 - c * c);
-    return texel * clamp((sn - c) / max(c * c, 0.05), 0.0, 2.0);
+    // 1/cos θ up to 77° (tan θ = 4.4), where the offset reaches its cap: one division.
+    let ic = 1.0 / max(c, 0.2236);
+    return texel * vec2<f32>(clamp((sn - c) * ic * ic, 0.0, 2.0), min(sn * ic, 1.0) + 0.1);
 }
 
-// The fraction of the sky's irradiance at n that reaches p (rgb) and, when `radius` > 0, the
-// share of the hemisphere from which the light volume's light can arrive (a), in one pass over
-// the directions (they share each direction's projection).
+// What sky_terms finds at a point: the fraction of the sky's irradiance that reaches it around
+// n (front) and, on thin translucent surfaces, around −n (back; 1 elsewhere), per channel; and
+// the share of the hemisphere from which the light volume's light can arrive (far).
+struct SkyTerms {
+    front: vec3<f32>,
+    back: vec3<f32>,
+    far: f32,
+}
+
+// The sky terms of s, in one pass over the directions (they share each direction's
+// projection; on lavapipe a second pass for the back doubled the leaves' cost).
 //
-// rgb: Σ V_k E_k(n) / Σ E_k(n) per channel, E_k(n) = E⊥_k ⟨n, ω_k⟩₊ the cell as a small source,
-// V_k one bilinear depth comparison (2 × 2 texels) with the point moved off the surface along
-// ng by `receiver_offset`; 1 without occlusion. Directions whose cell does not light n are not
-// sampled for it. Per channel, not by luminance: where a building hides the pale horizon and
+// front: Σ V_k E_k(n) / Σ E_k(n) per channel, E_k(n) = E⊥_k ⟨n, ω_k⟩₊ the cell as a small
+// source, V_k one bilinear depth comparison (2 × 2 texels) with the point moved off the surface
+// along ng by `receiver_shift`; 1 without occlusion. Directions whose cell does not light n are
+// not sampled for it. Per channel, not by luminance: where a building hides the pale horizon and
 // leaves the blue zenith, the light that reaches the point is bluer than the whole sky's
 // (a luminance ratio on the whole sky's irradiance turned a courtyard's shade grey).
 //
-// a: the share of the hemisphere around n (cosine-weighted, each direction by its cell's solid
-// angle, cell.w) in which the first surface seen from p along ω_k lies further than `radius`.
-// Indirect light arrives only from surfaces: where p sees the sky (V_k = 1) it gets the sky's
-// light, which rgb covers, and no bounce; where the first surface lies within `radius` it is
-// nearer than the volume's cells resolve (the volume holds light from beyond it). The volume's
-// blurred 2-band light stands for the rest; 1 without directions.
-fn sky_terms(s: Surface, radius: f32) -> vec4<f32> {
+// back: the same around −n, the point moved along −ng, on thin translucent surfaces (foliage:
+// the sky behind a leaf lights it through its back, as the path tracer's thin BSDF); 1 on
+// opaque ones, which skip the back hemisphere.
+//
+// far: the share of the hemisphere around n (cosine-weighted, each direction by its cell's
+// solid angle, cell.w) in which the first surface seen from p along ω_k lies further than
+// `radius`. Indirect light arrives only from surfaces: where p sees the sky (V_k = 1) it gets
+// the sky's light, which front covers, and no bounce; where the first surface lies within
+// `radius` it is nearer than the volume's cells resolve (the volume holds light from beyond
+// it). The volume's blurred 2-band light stands for the rest; 1 without directions.
+fn sky_terms(s: Surface, radius: f32) -> SkyTerms {
     let count = u32(sky.x);
     let texel = sky.y;
     let range = 3.0 * sky.z;
+    let two_sided = s.transmission > 0.0;
     var lit = vec3<f32>(0.0);
     var seen = vec3<f32>(0.0);
+    var lit_back = vec3<f32>(0.0);
+    var seen_back = vec3<f32>(0.0);
     var area = 0.0;
     var far = 0.0;
     for (var k = 0u; k < count; k++) {
         let d = sky_dirs[k];
         let dir = -d.rows[2].xyz * range;
         let c = dot(s.n, dir);
-        let w = d.cell.xyz * c;
-        if c <= 0.0 || (all(w <= vec3<f32>(0.0)) && radius <= 0.0) {
+        let front = c > 0.0;
+        let w = d.cell.xyz * abs(c);
+        if !(front || (two_sided && c < 0.0)) || (all(w <= vec3<f32>(0.0)) && (radius <= 0.0 || !front)) {
             continue;
         }
-        let q = vec4<f32>(s.p + s.ng * receiver_offset(dot(s.ng, dir), texel), 1.0);
+        let ng = select(-s.ng, s.ng, front);
+        let shift = receiver_shift(dot(ng, dir), texel);
+        let q = vec4<f32>(s.p + ng * shift.x, 1.0);
         let clip = vec3<f32>(dot(d.rows[0], q), dot(d.rows[1], q), dot(d.rows[2], q));
         let uv = vec2<f32>(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
-        // Nothing between p and the sky (one texel's depth, in the map's 0..1 range over
-        // 3 radii, as a bias).
-        let v = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - texel / range);
+        // Nothing between p and the sky (in the map's 0..1 depth over 3 radii).
+        let v = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - shift.y / range);
         let wl = max(w, vec3<f32>(0.0));
+        if !front {
+            lit_back += wl;
+            seen_back += wl * v;
+            continue;
+        }
         lit += wl;
         seen += wl * v;
         if radius > 0.0 {
@@ -87,13 +117,26 @@ fn sky_terms(s: Surface, radius: f32) -> vec4<f32> {
             far += wo * (1.0 - within);
         }
     }
-    return vec4<f32>(
-        select(vec3<f32>(1.0), seen / max(lit, vec3<f32>(1e-8)), lit > vec3<f32>(0.0)),
-        select(1.0, far / max(area, 1e-8), area > 0.0),
-    );
+    var t: SkyTerms;
+    t.front = select(vec3<f32>(1.0), seen / max(lit, vec3<f32>(1e-8)), lit > vec3<f32>(0.0));
+    t.back = select(vec3<f32>(1.0), seen_back / max(lit_back, vec3<f32>(1e-8)), lit_back > vec3<f32>(0.0));
+    t.far = select(1.0, far / max(area, 1e-8), area > 0.0);
+    return t;
 }
 
-// The fraction of the sky's irradiance at n that reaches p, per channel (`sky_terms`' rgb).
+// The fraction of the sky's irradiance at n that reaches p, per channel (`sky_terms`' front).
 fn sky_visibility(s: Surface) -> vec3<f32> {
-    return sky_terms(s, 0.0).rgb;
+    return sky_terms(s, 0.0).front;
+}
+
+// The sky's diffuse light leaving s towards the viewer, occluded by `t`: the light arriving
+// around n reflected, 1 − transmission of it on thin translucent surfaces, and transmission of
+// the light arriving around −n (as `diffuse_coef` and the lights' thin transmission).
+fn sky_light(s: Surface, t: SkyTerms) -> vec3<f32> {
+    let front = s.diffuse * sky_irradiance(s.n) * t.front;
+    if s.transmission <= 0.0 {
+        return front;
+    }
+    let back = s.diffuse * sky_irradiance(-s.n) * t.back;
+    return (1.0 - s.transmission) * front + s.transmission * back;
 }
