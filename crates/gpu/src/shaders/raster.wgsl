@@ -419,8 +419,11 @@ fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
     if sv.ortho == 0u {
         texel *= length(p - li.position);
     }
-    // Normal-offset bias: move the lookup point off the surface by a few texels.
-    let q = p + ng * (frame.normal_offset * texel);
+    // Normal-offset bias: move the lookup point off the surface by a few texels, on the light's
+    // side: a thin translucent surface lit from behind (seen from its unlit side) is lit through
+    // its back, and moved away from the light it would shadow itself.
+    let nl = select(-ng, ng, dot(ng, light_dir(li, p)) >= 0.0);
+    let q = p + nl * (frame.normal_offset * texel);
     let clip = sv.view_proj * vec4<f32>(q, 1.0);
     if clip.w <= 0.0 {
         return 1.0;
@@ -431,7 +434,7 @@ fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
         return 1.0;
     }
     if li.kind == 3u && frame.shadow_mode == 1u && sv.ortho == 0u {
-        return area_shadow(li, vi, sv, q, ng, uv, ndc.z);
+        return area_shadow(li, vi, sv, q, nl, uv, ndc.z);
     }
     let r = frame.pcf_radius;
     let inv = 1.0 / frame.shadow_size;
