@@ -213,6 +213,17 @@ pub fn cascade_ends(near: f32, far: f32, count: usize, lambda: f32) -> Vec<f32> 
         .collect()
 }
 
+/// The smallest sphere around a frustum slice whose near and far faces, at view distances `a`
+/// and `b`, have corners `ra` and `rb` off the view axis: its centre's view distance and its
+/// radius. The centre lies on the axis where the near and far corners are equally far, or on
+/// the far face when that point lies beyond it. (The corners' centroid, used before, gave
+/// spheres 8–10 % wider for the bush's view, and texels as much coarser.)
+pub fn slice_sphere(a: f32, b: f32, ra: f32, rb: f32) -> (f32, f32) {
+    let z = ((b * b - a * a + rb * rb - ra * ra) / (2.0 * (b - a)).max(1e-6)).clamp(a, b);
+    let radius = ((z - a).hypot(ra)).max((b - z).hypot(rb));
+    (z, radius)
+}
+
 /// Cascaded shadow views of a directional light for a camera: each cascade is an orthographic
 /// view of the bounding sphere of its slice of the view frustum (so its size does not change
 /// as the camera turns), with the centre snapped to whole texels (no shimmering when the camera
@@ -236,23 +247,14 @@ pub fn cascade_views(
         zmax = zmax.max(z);
     }
     let t = (camera.yfov * 0.5).tan();
+    // The slice's corners lie at distance r(d) = d·t·√(aspect² + 1) from the view axis.
+    let spread = t * (aspect * aspect + 1.0).sqrt();
     let mut start = near;
     ends.iter()
         .map(|&end| {
-            // Frustum slice [start, end] corners in world space.
-            let mut corners = vec![];
-            for d in [start, end] {
-                for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                    let local = Vec3::new(sx * t * aspect * d, sy * t * d, -d);
-                    corners.push(camera.transform.transform_point3(local));
-                }
-            }
+            let (z, radius) = slice_sphere(start, end, start * spread, end * spread);
             start = end;
-            let center = corners.iter().copied().sum::<Vec3>() / corners.len() as f32;
-            let radius = corners
-                .iter()
-                .map(|c| (*c - center).length())
-                .fold(0.0, f32::max);
+            let center = camera.transform.transform_point3(Vec3::new(0.0, 0.0, -z));
             // Round the radius up so it changes in steps, and snap the centre to texels.
             let radius = (radius * 16.0).ceil() / 16.0;
             let texel = 2.0 * radius / size as f32;
@@ -343,6 +345,28 @@ mod tests {
     }
 
     #[test]
+    fn slice_spheres_are_the_smallest_that_hold_their_slices() {
+        for (a, b, ra, rb) in [
+            (0.05, 1.0, 0.03, 0.6),
+            (2.2, 4.6, 1.3, 2.8),
+            (4.6, 11.3, 2.8, 6.8),
+            (1.0, 1.1, 5.0, 5.5),
+        ] {
+            let (z, r) = slice_sphere(a, b, ra, rb);
+            let far = |z: f32| (z - a).hypot(ra).max((b - z).hypot(rb));
+            assert!((far(z) - r).abs() < 1e-5 && (a..=b).contains(&z));
+            // No other centre on the axis does better (the optimum lies on the axis by symmetry).
+            for k in 0..=100 {
+                let zk = a + (b - a) * k as f32 / 100.0;
+                assert!(far(zk) >= r - 1e-5, "{a} {b}: {zk} gives {} < {r}", far(zk));
+            }
+            // Never wider than the corners' centroid sphere used before.
+            let c = 0.5 * (a + b);
+            assert!(r <= far(c) + 1e-6);
+        }
+    }
+
+    #[test]
     fn cascades_cover_their_slices() {
         let cam = Camera::look_at("c", Vec3::new(0.0, 5.0, 10.0), Vec3::ZERO, Vec3::Y, 0.8);
         let ends = cascade_ends(0.1, 40.0, 4, 0.7);
@@ -358,6 +382,21 @@ mod tests {
             bounds,
             1024,
         );
+        // Every corner of every slice projects inside its cascade.
+        let t = (0.8f32 * 0.5).tan();
+        let mut start = 0.1;
+        for (view, &end) in views.iter().zip(&ends) {
+            for d in [start, end] {
+                for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                    let p = Vec3::new(sx * t * 1.5 * d, sy * t * d, -d);
+                    let c = view
+                        .view_proj
+                        .project_point3(cam.transform.transform_point3(p));
+                    assert!(c.x.abs() <= 1.0 && c.y.abs() <= 1.0, "{d}: {c}");
+                }
+            }
+            start = end;
+        }
         // A point in the middle of cascade 1's slice projects inside it.
         let d = 0.5 * (ends[0] + ends[1]);
         let p = cam.transform.transform_point3(Vec3::new(0.3, -0.2, -d));
