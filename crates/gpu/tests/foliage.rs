@@ -9,7 +9,10 @@ use lightlab_scene::builtin::geom::quad;
 use lightlab_scene::{
     AlphaMode, BrdfModel, Camera, Light, LightKind, Material, Scene, Texture, TextureRef,
 };
-use lightlab_trace::{Accel, PathTracer, RenderSettings};
+use lightlab_trace::Accel;
+
+mod common;
+use common::traced_direct;
 
 const N: u32 = 64;
 
@@ -93,20 +96,7 @@ fn half_means(img: &Image) -> (f32, f32) {
 fn translucency_maps_scale_light_through_the_back_of_a_leaf() {
     let Some(ctx) = test_context() else { return };
     let scene = backlit_leaf(true);
-    let accel = Accel::new(&scene);
-    let settings = RenderSettings {
-        width: N,
-        height: N,
-        spp: 16,
-        max_depth: 1,
-        min_depth: 0,
-        seed: 5,
-        camera: 0,
-        lens: Default::default(),
-    };
-    let reference = PathTracer::new(&scene, &accel)
-        .render(&settings, &|_, _| true)
-        .unwrap();
+    let reference = traced_direct(&scene, N, N, 16, 5);
     let gpu = |scene: &Scene, shadows: ShadowMethod| {
         let mut r = Renderer::new(
             &ctx,
@@ -311,6 +301,24 @@ fn leaf_under_the_sky(roof: bool) -> Scene {
     s
 }
 
+/// `scene` on the GPU with shadow maps and the occluded sky, 2 × 2 supersampled.
+fn shadow_mapped_sky(ctx: &lightlab_gpu::GpuContext, scene: &Scene, w: u32, h: u32) -> Image {
+    let mut r = Renderer::new(
+        ctx,
+        scene,
+        RasterSettings {
+            width: w * 2,
+            height: h * 2,
+            shadows: ShadowMethod::Map,
+            ambient: Ambient::Environment,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    r.render(ctx);
+    r.read_hdr(ctx).unwrap().downsample(2)
+}
+
 /// The sky behind a thin translucent leaf lights it through its back (issue 22, foliage), and
 /// what hides that sky hides its light: the occluded sky term against the path tracer's direct
 /// light, with and without a roof over the leaf. (The sky term once lit leaves by their front
@@ -321,34 +329,8 @@ fn the_sky_lights_a_leaf_through_its_back_where_nothing_hides_it() {
     let mut means = vec![];
     for roof in [false, true] {
         let scene = leaf_under_the_sky(roof);
-        let accel = Accel::new(&scene);
-        let settings = RenderSettings {
-            width: 32,
-            height: 32,
-            spp: 256,
-            max_depth: 1,
-            min_depth: 0,
-            seed: 7,
-            camera: 0,
-            lens: Default::default(),
-        };
-        let traced = PathTracer::new(&scene, &accel)
-            .render(&settings, &|_, _| true)
-            .unwrap();
-        let mut r = Renderer::new(
-            &ctx,
-            &scene,
-            RasterSettings {
-                width: 64,
-                height: 64,
-                shadows: ShadowMethod::Map,
-                ambient: Ambient::Environment,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        r.render(&ctx);
-        let gpu = r.read_hdr(&ctx).unwrap().downsample(2);
+        let traced = traced_direct(&scene, 32, 32, 256, 7);
+        let gpu = shadow_mapped_sky(&ctx, &scene, 32, 32);
         let mean = |i: &Image| i.data.iter().map(|p| p.y as f64).sum::<f64>() / i.data.len() as f64;
         let (g, t) = (mean(&gpu), mean(&traced));
         eprintln!(
@@ -376,34 +358,8 @@ fn the_occluded_sky_darkens_the_inside_of_a_canopy() {
     let mut scene = lightlab_scene::builtin::builtin("bush").unwrap();
     scene.lights.clear();
     let (w, h) = (80u32, 60u32);
-    let accel = Accel::new(&scene);
-    let settings = RenderSettings {
-        width: w,
-        height: h,
-        spp: 64,
-        max_depth: 1,
-        min_depth: 0,
-        seed: 3,
-        camera: 0,
-        lens: Default::default(),
-    };
-    let traced = PathTracer::new(&scene, &accel)
-        .render(&settings, &|_, _| true)
-        .unwrap();
-    let mut r = Renderer::new(
-        &ctx,
-        &scene,
-        RasterSettings {
-            width: w * 2,
-            height: h * 2,
-            shadows: ShadowMethod::Map,
-            ambient: Ambient::Environment,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    r.render(&ctx);
-    let gpu = r.read_hdr(&ctx).unwrap().downsample(2);
+    let traced = traced_direct(&scene, w, h, 64, 3);
+    let gpu = shadow_mapped_sky(&ctx, &scene, w, h);
     // The canopy's inner part: an ellipse around its centre in the default view.
     let (cx, cy, rx, ry) = (
         0.494 * w as f32,

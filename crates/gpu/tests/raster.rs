@@ -7,7 +7,10 @@ use lightlab_gpu::lights::Attenuation;
 use lightlab_gpu::raster::{Ambient, RasterSettings, RenderPath, Renderer, ShadowMethod};
 use lightlab_gpu::{GpuContext, test_context};
 use lightlab_scene::{BrdfModel, Camera, LightKind, Scene, builtin};
-use lightlab_trace::{Accel, PathTracer, RenderSettings};
+use lightlab_trace::Accel;
+
+mod common;
+use common::traced_direct;
 
 const N: u32 = 256;
 
@@ -643,27 +646,6 @@ fn cornell_is_lit_by_its_lamp() {
         errors[1],
         errors[0]
     );
-}
-
-/// The path tracer's direct light (emission seen + one scattering event) from the scene's
-/// first camera.
-fn traced_direct(scene: &Scene, width: u32, height: u32, spp: u32, seed: u64) -> Image {
-    let accel = Accel::new(scene);
-    PathTracer::new(scene, &accel)
-        .render(
-            &RenderSettings {
-                width,
-                height,
-                spp,
-                max_depth: 1,
-                min_depth: 0,
-                seed,
-                camera: 0,
-                lens: Default::default(),
-            },
-            &|_, _| true,
-        )
-        .unwrap()
 }
 
 /// The sky's light in a closed room lit through a window (issue 22), the sun taken away: the

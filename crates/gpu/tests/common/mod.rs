@@ -1,4 +1,4 @@
-//! Helpers shared by the light-map and SH GPU tests.
+//! Helpers shared by the GPU tests.
 
 use lightlab_bake::Lightmaps;
 use lightlab_gpu::gpu_scene::UvRect;
@@ -23,4 +23,32 @@ pub fn layout_rects(layout: &lightlab_bake::layout::Layout) -> Vec<Option<UvRect
             })
         })
         .collect()
+}
+
+/// The path tracer's direct light (emission seen + one scattering event) from the scene's
+/// first camera.
+#[allow(dead_code)]
+pub fn traced_direct(
+    scene: &lightlab_scene::Scene,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u64,
+) -> lightlab_core::image::Image {
+    let accel = lightlab_trace::Accel::new(scene);
+    lightlab_trace::PathTracer::new(scene, &accel)
+        .render(
+            &lightlab_trace::RenderSettings {
+                width,
+                height,
+                spp,
+                max_depth: 1,
+                min_depth: 0,
+                seed,
+                camera: 0,
+                lens: Default::default(),
+            },
+            &|_, _| true,
+        )
+        .unwrap()
 }
