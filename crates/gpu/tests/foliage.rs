@@ -12,7 +12,7 @@ use lightlab_scene::{
 use lightlab_trace::Accel;
 
 mod common;
-use common::traced_direct;
+use common::{shadow_mapped_sky, traced_direct};
 
 const N: u32 = 64;
 
@@ -299,24 +299,6 @@ fn leaf_under_the_sky(roof: bool) -> Scene {
         0.8,
     ));
     s
-}
-
-/// `scene` on the GPU with shadow maps and the occluded sky, 2 × 2 supersampled.
-fn shadow_mapped_sky(ctx: &lightlab_gpu::GpuContext, scene: &Scene, w: u32, h: u32) -> Image {
-    let mut r = Renderer::new(
-        ctx,
-        scene,
-        RasterSettings {
-            width: w * 2,
-            height: h * 2,
-            shadows: ShadowMethod::Map,
-            ambient: Ambient::Environment,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    r.render(ctx);
-    r.read_hdr(ctx).unwrap().downsample(2)
 }
 
 /// The sky behind a thin translucent leaf lights it through its back (issue 22, foliage), and

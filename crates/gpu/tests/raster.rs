@@ -10,7 +10,7 @@ use lightlab_scene::{BrdfModel, Camera, LightKind, Scene, builtin};
 use lightlab_trace::Accel;
 
 mod common;
-use common::traced_direct;
+use common::{shadow_mapped_sky, traced_direct};
 
 const N: u32 = 256;
 
@@ -741,20 +741,7 @@ fn the_occluded_sky_keeps_the_colour_of_what_it_sees() {
     ));
     let (w, h) = (64, 64);
     let traced = traced_direct(&scene, w, h, 64, 3);
-    let mut r = Renderer::new(
-        &ctx,
-        &scene,
-        RasterSettings {
-            width: w * 2,
-            height: h * 2,
-            shadows: ShadowMethod::Map,
-            ambient: Ambient::Environment,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    r.render(&ctx);
-    let gpu = r.read_hdr(&ctx).unwrap().downsample(2);
+    let gpu = shadow_mapped_sky(&ctx, &scene, w, h);
     let mean = |i: &Image| i.data.iter().copied().sum::<Vec3>() / i.data.len() as f32;
     let (g, t) = (mean(&gpu), mean(&traced));
     let (bg, bt) = (g.z / g.x, t.z / t.x);

@@ -52,3 +52,28 @@ pub fn traced_direct(
         )
         .unwrap()
 }
+
+/// `scene` on the GPU with shadow maps and the occluded sky, 2 × 2 supersampled.
+#[allow(dead_code)]
+pub fn shadow_mapped_sky(
+    ctx: &lightlab_gpu::GpuContext,
+    scene: &lightlab_scene::Scene,
+    w: u32,
+    h: u32,
+) -> lightlab_core::image::Image {
+    use lightlab_gpu::raster::{Ambient, RasterSettings, Renderer, ShadowMethod};
+    let mut r = Renderer::new(
+        ctx,
+        scene,
+        RasterSettings {
+            width: w * 2,
+            height: h * 2,
+            shadows: ShadowMethod::Map,
+            ambient: Ambient::Environment,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    r.render(ctx);
+    r.read_hdr(ctx).unwrap().downsample(2)
+}
