@@ -165,19 +165,19 @@ fn source_vertex(p: vec3<f32>, vi: u32, ii: u32) -> vec3<f32> {
 
 // Only the volume's indirect light in the indirect-only view.
 fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
-    // Thin foliage (diffuse transmission t): 1 − t of the light arriving on the front is
-    // reflected, t of the light arriving on the back leaves through the front.
-    var e = lpv_irradiance(s.p, s.n);
-    if s.transmission > 0.0 {
-        e = (1.0 - s.transmission) * e + s.transmission * lpv_irradiance(s.p, -s.n);
-    }
     if lpv_u.mode == 2u && lpv_u.sun_dir.w > 0.5 && lpv_u.indirect_only == 0u {
         return wpi_composite(s) + emission(in);
     }
-    // The sky's visibility and the share of the hemisphere the volume's light comes from (the
-    // surfaces beyond the lookup's reach), in one pass.
+    // The sky's visibility and the shares of the hemispheres the volume's light comes from
+    // (the surfaces beyond the lookup's reach), in one pass.
     let sky_t = sky_terms(s, lpv_u.occlusion_radius);
-    let indirect = s.diffuse / PI * e * sky_t.far;
+    var e = lpv_irradiance(s.p, s.n) * sky_t.far;
+    if s.transmission > 0.0 {
+        // Thin foliage (diffuse transmission t): 1 − t of the light arriving on the front is
+        // reflected, t of the light arriving on the back leaves through the front.
+        e = (1.0 - s.transmission) * e + s.transmission * lpv_irradiance(s.p, -s.n) * sky_t.far_back;
+    }
+    let indirect = s.diffuse / PI * e;
     if lpv_u.indirect_only == 1u {
         return indirect;
     }

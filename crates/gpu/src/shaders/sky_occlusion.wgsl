@@ -45,11 +45,18 @@ fn receiver_shift(cg: f32, texel: f32) -> vec2<f32> {
 
 // What sky_terms finds at a point: the fraction of the sky's irradiance that reaches it around
 // n (front) and, on thin translucent surfaces, around −n (back; 1 elsewhere), per channel; and
-// the share of the hemisphere from which the light volume's light can arrive (far).
+// the shares of the hemispheres around n and −n from which the light volume's light can arrive
+// (far, far_back).
 struct SkyTerms {
     front: vec3<f32>,
     back: vec3<f32>,
     far: f32,
+    far_back: f32,
+}
+
+// seen / lit per channel; 1 where nothing lit.
+fn lit_share(seen: vec3<f32>, lit: vec3<f32>) -> vec3<f32> {
+    return select(vec3<f32>(1.0), seen / max(lit, vec3<f32>(1e-8)), lit > vec3<f32>(0.0));
 }
 
 // The sky terms of s, in one pass over the directions (they share each direction's
@@ -72,6 +79,8 @@ struct SkyTerms {
 // the sky's light, which front covers, and no bounce; where the first surface lies within
 // `radius` it is nearer than the volume's cells resolve (the volume holds light from beyond
 // it). The volume's blurred 2-band light stands for the rest; 1 without directions.
+// far_back: the same around −n on thin translucent surfaces (the light arriving on their back
+// passes through); far elsewhere.
 fn sky_terms(s: Surface, radius: f32) -> SkyTerms {
     let count = u32(sky.x);
     let texel = sky.y;
@@ -81,15 +90,19 @@ fn sky_terms(s: Surface, radius: f32) -> SkyTerms {
     var seen = vec3<f32>(0.0);
     var lit_back = vec3<f32>(0.0);
     var seen_back = vec3<f32>(0.0);
-    var area = 0.0;
-    var far = 0.0;
+    // The hemispheres' weights and their far shares: front in x, back in y.
+    var area = vec2<f32>(0.0);
+    var far = vec2<f32>(0.0);
     for (var k = 0u; k < count; k++) {
         let d = sky_dirs[k];
         let dir = -d.rows[2].xyz * range;
         let c = dot(s.n, dir);
         let front = c > 0.0;
+        if !(front || (two_sided && c < 0.0)) {
+            continue;
+        }
         let w = d.cell.xyz * abs(c);
-        if !(front || (two_sided && c < 0.0)) || (all(w <= vec3<f32>(0.0)) && (radius <= 0.0 || !front)) {
+        if all(w <= vec3<f32>(0.0)) && radius <= 0.0 {
             continue;
         }
         let ng = select(-s.ng, s.ng, front);
@@ -100,27 +113,30 @@ fn sky_terms(s: Surface, radius: f32) -> SkyTerms {
         // Nothing between p and the sky (in the map's 0..1 depth over 3 radii).
         let v = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - shift.y / range);
         let wl = max(w, vec3<f32>(0.0));
-        if !front {
+        if front {
+            lit += wl;
+            seen += wl * v;
+        } else {
             lit_back += wl;
             seen_back += wl * v;
-            continue;
         }
-        lit += wl;
-        seen += wl * v;
         if radius > 0.0 {
             // Nothing nearer to the sky than `radius` from p: where this is 0 a surface lies
             // beyond the radius (comparisons only: depth textures cannot be read as values on
             // every backend).
             let within = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - radius / range);
-            let wo = d.cell.w * c;
-            area += wo;
-            far += wo * (1.0 - within);
+            let side = select(vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), front);
+            let wo = d.cell.w * abs(c);
+            area += side * wo;
+            far += side * (wo * (1.0 - within));
         }
     }
     var t: SkyTerms;
-    t.front = select(vec3<f32>(1.0), seen / max(lit, vec3<f32>(1e-8)), lit > vec3<f32>(0.0));
-    t.back = select(vec3<f32>(1.0), seen_back / max(lit_back, vec3<f32>(1e-8)), lit_back > vec3<f32>(0.0));
-    t.far = select(1.0, far / max(area, 1e-8), area > 0.0);
+    t.front = lit_share(seen, lit);
+    t.back = lit_share(seen_back, lit_back);
+    let share = select(vec2<f32>(1.0), far / max(area, vec2<f32>(1e-8)), area > vec2<f32>(0.0));
+    t.far = share.x;
+    t.far_back = select(share.x, share.y, two_sided);
     return t;
 }
 
