@@ -8,7 +8,7 @@ exactly the same triangles, single-threaded (embreex runs one rtcIntersect per r
 its per-ray Python-side loop included). Printed: lightlab/Embree per ray kind. Target (issue 2):
 >= 0.5x Embree's single-thread throughput on incoherent rays.
 
-Usage: python3 bench/trace_vs_embree.py [--scenes cornell,bush,prt] [--rays N] [--repeat K] [--json]
+Usage: python3 bench/trace_vs_embree.py [--scenes cornell,bush,prt] [--rays N] [--repeat K] [--bvh SETTING] [--json]
 Each scene runs K pairs (lightlab, then Embree, alternated; each side best of three inside its
 run); the printed ratio is the median of the K pair ratios, [min-max] beside it, and the two
 figures shown are those of the median pair. On a shared 2-core machine one pair's ratio moves by
@@ -27,6 +27,8 @@ def main():
     ap.add_argument("--scenes", default="cornell,bush,prt")
     ap.add_argument("--rays", type=int, default=1_000_000)
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--bvh", default="default",
+                    help="lightlab's BVH build setting (`lightlab bench trace --bvh`), to compare settings")
     ap.add_argument("--repeat", type=int, default=3,
                     help="pairs of runs per scene (lightlab then Embree); the median ratio is reported")
     ap.add_argument("--inner", action="store_true", help=argparse.SUPPRESS)
@@ -45,13 +47,13 @@ def main():
             pairs = []
             for k in range(max(1, args.repeat)):
                 # The first run also dumps the rays; later runs time the same rays again.
-                cmd = [exe, "bench", "trace", "--scene", glb, "--rays", str(args.rays), "--json", "--opaque"]
+                cmd = [exe, "bench", "trace", "--scene", glb, "--rays", str(args.rays), "--json", "--opaque", "--bvh", args.bvh]
                 if k == 0:
                     cmd += ["--dump", d]
                 ours = json.loads(subprocess.check_output(cmd).decode().strip().splitlines()[-1])
                 theirs = json.loads(subprocess.check_output([py, __file__, "--inner", "--dir", d]).decode().strip().splitlines()[-1])
                 pairs.append((ours, theirs))
-            alpha = json.loads(subprocess.check_output([exe, "bench", "trace", "--scene", glb, "--rays", str(args.rays), "--json"]).decode().strip().splitlines()[-1])
+            alpha = json.loads(subprocess.check_output([exe, "bench", "trace", "--scene", glb, "--rays", str(args.rays), "--json", "--bvh", args.bvh]).decode().strip().splitlines()[-1])
             med = lambda xs: sorted(xs)[len(xs) // 2]
             r = {"scene": scene, "triangles": pairs[0][0]["triangles"], "pairs": len(pairs),
                  "lightlab_alpha_incoherent_1t": alpha["incoherent_mrays_1t"]}

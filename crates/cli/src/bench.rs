@@ -48,6 +48,12 @@ pub enum BenchCommand {
         /// Ignore alpha (treat alpha-tested triangles as opaque).
         #[arg(long)]
         opaque: bool,
+        /// How the BVH is built: PRESET[:KEY=VALUE,...], PRESET one of very-fast, fast,
+        /// medium, slow, very-slow (obvhs's, with leaves of up to 16 triangles and collapse
+        /// cost 4) or default; keys search (1, 2, 6, 14, 24, 32), depth, reinsert, post, leaf
+        /// (1–16), collapse, presplit (true/false).
+        #[arg(long, default_value = "default")]
+        bvh: lightlab_trace::BvhSettings,
         #[command(flatten)]
         load: LoadArgs,
         /// Print one JSON object with the figures as the last line.
@@ -154,9 +160,10 @@ pub fn run(cmd: BenchCommand) -> Result<()> {
             rays,
             dump,
             opaque,
+            bvh,
             load,
             json,
-        } => bench_trace((&scene, &load), json, rays, dump, opaque),
+        } => bench_trace((&scene, &load), json, rays, dump, (opaque, bvh)),
         BenchCommand::Bake {
             scene,
             bake,
@@ -317,7 +324,7 @@ fn bench_trace(
     json: bool,
     n: usize,
     dump_dir: Option<std::path::PathBuf>,
-    opaque: bool,
+    (opaque, bvh): (bool, lightlab_trace::BvhSettings),
 ) -> Result<()> {
     anyhow::ensure!(
         (1..=100_000_000).contains(&n),
@@ -325,7 +332,7 @@ fn bench_trace(
     );
     let s = load_scene(scene.0, scene.1)?;
     let t = Instant::now();
-    let accel = Accel::with_alpha_test(&s, !opaque);
+    let accel = Accel::with_settings(&s, !opaque, bvh);
     let build = t.elapsed().as_secs_f64();
     let (primary, secondary) = ray_sets(&s, &accel, n)?;
     if let Some(dir) = &dump_dir {

@@ -6,12 +6,13 @@
 //! Alpha-tested (MASK, and BLEND treated as MASK at 0.5) triangles are tested against their
 //! texture inside the traversal, so holes in leaves let rays through.
 
+use crate::bvh_settings::BvhSettings;
 use crate::bvh8::Bvh8;
 use glam::{Mat3, Vec2, Vec3, Vec3A};
 use lightlab_scene::{AlphaMode, Scene, Texture};
 use obvhs::ray::Ray;
 use obvhs::rt_triangle::RtTriangle;
-use obvhs::{BvhBuildParams, triangle::Triangle};
+use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
 /// Where a triangle came from.
@@ -126,14 +127,6 @@ fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
 /// with four-triangle blocks: leaves of up to 8 against up to 4, bush 3.81 / 3.64; obvhs's
 /// medium preset −5 to −10 %, very-slow within noise at twice the build time; no pre-splits
 /// −5 % on bush.
-fn build_params() -> BvhBuildParams {
-    BvhBuildParams {
-        max_prims_per_leaf: 16,
-        collapse_traversal_cost: 4.0,
-        ..BvhBuildParams::slow_build()
-    }
-}
-
 /// A ray for batch queries.
 #[derive(Clone, Copy, Debug)]
 pub struct RayQuery {
@@ -151,6 +144,11 @@ impl Accel {
     /// As [`Accel::new`]; `alpha_test = false` treats every triangle as opaque (for
     /// like-for-like benchmarks against ray casters that do no alpha test).
     pub fn with_alpha_test(scene: &Scene, alpha_test: bool) -> Accel {
+        Self::with_settings(scene, alpha_test, BvhSettings::default())
+    }
+
+    /// As [`Accel::with_alpha_test`], the BVH built with `bvh` (`bench trace --bvh`).
+    pub fn with_settings(scene: &Scene, alpha_test: bool, bvh: BvhSettings) -> Accel {
         let mut tris = Vec::with_capacity(scene.triangle_count());
         let mut prims = Vec::with_capacity(tris.capacity());
         let mut alpha_of: Vec<Option<AlphaTri>> = Vec::with_capacity(tris.capacity());
@@ -189,7 +187,7 @@ impl Accel {
                 }));
             }
         }
-        let bvh = Bvh8::build(&tris, build_params(), |i| alpha_of[i].is_some());
+        let bvh = Bvh8::build(&tris, bvh.params, |i| alpha_of[i].is_some());
         // Per slot: the triangle, where it came from and its alpha record (pre-splits may put
         // one triangle in several leaves; unused slots get a degenerate triangle no ray hits).
         let unused = Triangle {

@@ -8,6 +8,7 @@
 pub mod accel;
 pub mod bsdf;
 pub mod bvh8;
+pub mod bvh_settings;
 pub mod lights;
 pub mod luminaire;
 pub mod radiance_field;
@@ -15,4 +16,5 @@ pub mod refraction_field;
 pub mod render;
 
 pub use accel::Accel;
+pub use bvh_settings::BvhSettings;
 pub use render::{LightUse, PathTracer, RenderError, RenderSettings, WindowEmitter};
