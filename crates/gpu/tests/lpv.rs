@@ -712,6 +712,11 @@ fn hit_box(o: Vec3, d: Vec3, (lo, hi): (Vec3, Vec3)) -> Option<f32> {
 /// The cosine-weighted share of the upper hemisphere at p (normal +y) in which the first of
 /// `boxes` lies further than `radius` (a 64 × 64 stratified grid of directions).
 fn far_share(p: Vec3, boxes: &[(Vec3, Vec3)], radius: f32) -> f32 {
+    far_share_around(p, 1.0, boxes, radius)
+}
+
+/// As [`far_share`], over the hemisphere around `up`·(0, 1, 0) (`up` = ±1).
+fn far_share_around(p: Vec3, up: f32, boxes: &[(Vec3, Vec3)], radius: f32) -> f32 {
     let n = 64;
     let mut far = 0;
     for i in 0..n {
@@ -719,7 +724,7 @@ fn far_share(p: Vec3, boxes: &[(Vec3, Vec3)], radius: f32) -> f32 {
             // Malley: a disc point lifted to the hemisphere is cosine-distributed.
             let (u, v) = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
             let (r, phi) = (u.sqrt(), std::f32::consts::TAU * v);
-            let d = Vec3::new(r * phi.cos(), (1.0 - u).sqrt(), r * phi.sin());
+            let d = Vec3::new(r * phi.cos(), up * (1.0 - u).sqrt(), r * phi.sin());
             let first = boxes
                 .iter()
                 .filter_map(|&b| hit_box(p, d, b))
@@ -728,6 +733,98 @@ fn far_share(p: Vec3, boxes: &[(Vec3, Vec3)], radius: f32) -> f32 {
         }
     }
     far as f32 / (n * n) as f32
+}
+
+#[test]
+fn a_leafs_light_through_its_back_keeps_its_back_hemispheres_share() {
+    // A 2 m double-sided leaf that lets all light through (diffuse transmission 1), 2.5 m over
+    // a 10 m ground under a uniform sky, seen from above. Its indirect light is the volume's
+    // light arriving on its back, around −n, where the ground lies beyond the lookup's reach:
+    // near occlusion keeps the share of the back hemisphere whose first surface lies beyond it
+    // (about 0.9: all but the directions past the ground's edge). The front sees only sky, so
+    // the front's share (what the back's light was kept by before) is 0.
+    let Some(ctx) = test_context() else { return };
+    let mut scene = Scene::default();
+    let grey = scene.add_material(lightlab_scene::Material::diffuse("grey", Vec3::splat(0.5)));
+    let leaf = scene.add_material(lightlab_scene::Material {
+        double_sided: true,
+        transmission: 1.0,
+        ..lightlab_scene::Material::diffuse("leaf", Vec3::new(0.3, 0.6, 0.2))
+    });
+    let quad = |name: &str, y: f32, h: f32, m| {
+        lightlab_scene::builtin::geom::quad_facing(
+            name,
+            [
+                Vec3::new(-h, y, -h),
+                Vec3::new(h, y, -h),
+                Vec3::new(h, y, h),
+                Vec3::new(-h, y, h),
+            ],
+            Vec3::Y,
+            m,
+        )
+    };
+    scene.add_mesh(quad("ground", 0.0, 5.0, grey), glam::Mat4::IDENTITY);
+    scene.add_mesh(quad("leaf", 2.5, 1.0, leaf), glam::Mat4::IDENTITY);
+    scene.cameras.push(lightlab_scene::Camera::look_at(
+        "above",
+        Vec3::new(0.0, 6.0, 0.01),
+        Vec3::new(0.0, 2.5, 0.0),
+        Vec3::Y,
+        0.5,
+    ));
+    let render = |near_occlusion| {
+        let s = LpvSettings {
+            near_occlusion,
+            ..Default::default()
+        };
+        let rs = RasterSettings {
+            width: 48,
+            height: 48,
+            shadows: ShadowMethod::None,
+            ambient: Ambient::Constant(Vec3::ONE),
+            ..Default::default()
+        };
+        let mut r = Renderer::with_lpv(&ctx, &scene, rs, &s, true).unwrap();
+        let radius = r.lpv().unwrap().near_occlusion_radius();
+        r.render(&ctx);
+        (r.read_hdr(&ctx).unwrap(), radius)
+    };
+    let (on, radius) = render(true);
+    let (off, _) = render(false);
+    let cam = scene.default_camera().unwrap();
+    let ground = (Vec3::new(-5.0, -0.01, -5.0), Vec3::new(5.0, 0.0, 5.0));
+    let lum = lightlab_core::color::luminance;
+    let (mut kept, mut expected, mut pixels) = (0.0f32, 0.0f32, 0);
+    for y in 0..48 {
+        for x in 0..48 {
+            let ndc = glam::Vec2::new((x as f32 + 0.5) / 24.0 - 1.0, 1.0 - (y as f32 + 0.5) / 24.0);
+            let (o, d) = (cam.position(), cam.ray_direction(ndc, 1.0));
+            let p = o + d * ((2.5 - o.y) / d.y);
+            // Leaf pixels away from its edge.
+            if p.x.abs() > 0.9 || p.z.abs() > 0.9 {
+                continue;
+            }
+            let b = lum(off.get(x, y));
+            assert!(
+                b > 1e-6,
+                "({x}, {y}): no light through the back without near occlusion"
+            );
+            kept += lum(on.get(x, y)) / b;
+            expected += far_share_around(p, -1.0, &[ground], radius);
+            pixels += 1;
+        }
+    }
+    assert!(pixels > 300, "{pixels}");
+    let (kept, expected) = (kept / pixels as f32, expected / pixels as f32);
+    eprintln!(
+        "radius {radius:.2} m: the leaf's back keeps {kept:.3}, expected {expected:.3} ({pixels} pixels)"
+    );
+    assert!(expected > 0.8, "{expected}");
+    assert!(
+        (kept - expected).abs() < 0.08,
+        "kept {kept}, expected {expected}"
+    );
 }
 
 #[test]
