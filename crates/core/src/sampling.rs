@@ -222,12 +222,18 @@ pub fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
     if a + b == 0.0 { 0.0 } else { a / (a + b) }
 }
 
-/// A piecewise-constant 1-D distribution over `n` bins of [0, 1).
+/// A piecewise-constant 1-D distribution over `n` bins of [0, 1), sampled in constant time
+/// through Walker's alias table (Vose's construction): u·n picks a bin, whose fraction either
+/// keeps it (below the bin's threshold) or moves to its alias, and what is left of the fraction
+/// places the sample inside the chosen bin. A binary search of the CDF cost the path tracer 7 %
+/// of its time on an environment-lit scene (two searches per environment sample).
 #[derive(Clone, Debug)]
 pub struct Distribution1D {
     func: Vec<f32>,
     cdf: Vec<f64>,
     integral: f64,
+    /// Per bin: the share of its slot it keeps, and the bin that takes the rest.
+    alias: Vec<(f32, u32)>,
 }
 
 impl Distribution1D {
@@ -258,10 +264,12 @@ impl Distribution1D {
             cdf.iter_mut().for_each(|c| *c /= integral);
         }
         let integral = if integral <= 0.0 { 1.0 } else { integral };
+        let alias = alias_table(&cdf);
         Distribution1D {
             func,
             cdf,
             integral,
+            alias,
         }
     }
 
@@ -280,8 +288,25 @@ impl Distribution1D {
 
     /// Sample a bin: (index, probability of that bin).
     pub fn sample_discrete(&self, u: f32) -> (usize, f32) {
-        let i = self.find(u as f64);
+        let i = self.pick(u).0;
         (i, self.discrete_pdf(i))
+    }
+
+    /// The alias table's bin for u ∈ [0, 1), and where in that bin the sample falls ([0, 1)).
+    fn pick(&self, u: f32) -> (usize, f64) {
+        let n = self.alias.len();
+        let x = (u as f64).clamp(0.0, 1.0) * n as f64;
+        let slot = (x as usize).min(n - 1);
+        let f = (x - slot as f64).clamp(0.0, 1.0);
+        let (keep, other) = self.alias[slot];
+        let keep = keep as f64;
+        if f < keep {
+            (slot, f / keep)
+        } else {
+            let rest = 1.0 - keep;
+            let t = if rest > 0.0 { (f - keep) / rest } else { 0.5 };
+            (other as usize, t.min(1.0))
+        }
     }
 
     /// Probability of choosing bin `i` with [`Self::sample_discrete`].
@@ -291,14 +316,7 @@ impl Distribution1D {
 
     /// Sample a continuous position in [0, 1): (x, density at x, bin).
     pub fn sample_continuous(&self, u: f32) -> (f32, f32, usize) {
-        let i = self.find(u as f64);
-        let lo = self.cdf[i];
-        let hi = self.cdf[i + 1];
-        let du = if hi > lo {
-            (u as f64 - lo) / (hi - lo)
-        } else {
-            0.5
-        };
+        let (i, du) = self.pick(u);
         let x = ((i as f64 + du) / self.func.len() as f64).min(1.0 - 1e-7) as f32;
         (x, self.density(i), i)
     }
@@ -308,12 +326,33 @@ impl Distribution1D {
         (self.func[i] as f64 / self.integral) as f32
     }
 
-    fn find(&self, u: f64) -> usize {
-        // Last index with cdf[i] <= u, clamped to a valid bin with non-zero width when possible.
-        let n = self.func.len();
-        let i = self.cdf.partition_point(|&c| c <= u).saturating_sub(1);
-        i.min(n - 1)
+}
+
+/// Vose's alias table for the bins' probabilities (the CDF's steps): each of the n slots holds
+/// 1/n of probability, its own bin's share of it and one other bin's. Slots whose bin has no
+/// probability keep none of it.
+fn alias_table(cdf: &[f64]) -> Vec<(f32, u32)> {
+    let n = cdf.len() - 1;
+    let mut scaled: Vec<f64> = cdf.windows(2).map(|w| (w[1] - w[0]) * n as f64).collect();
+    let mut table = vec![(1.0f32, 0u32); n];
+    for (i, t) in table.iter_mut().enumerate() {
+        t.1 = i as u32;
     }
+    let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| scaled[i] < 1.0);
+    while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+        small.pop();
+        table[s] = (scaled[s] as f32, l as u32);
+        scaled[l] -= 1.0 - scaled[s];
+        if scaled[l] < 1.0 {
+            large.pop();
+            small.push(l);
+        }
+    }
+    // What is left holds 1 up to rounding.
+    for i in small.into_iter().chain(large) {
+        table[i] = (1.0, i as u32);
+    }
+    table
 }
 
 /// A piecewise-constant 2-D distribution on [0,1)², rows along v (marginal) and columns along u.
@@ -463,8 +502,31 @@ mod tests {
         assert_eq!(counts[2], 0, "zero-weight bin must never be chosen");
         assert!((counts[3] as f64 / 80_000.0 - 0.5).abs() < 0.01);
         let (x, pdf, i) = d.sample_continuous(0.99);
-        assert_eq!(i, 3);
-        assert!(x >= 0.75 && (pdf - 2.0).abs() < 1e-5);
+        assert!((i as f32 / 4.0..(i + 1) as f32 / 4.0).contains(&x), "{x} in bin {i}");
+        assert!((pdf - d.density(i)).abs() < 1e-6);
+        // Continuous samples: the bins' shares, spread evenly inside each (halves of bins).
+        let mut halves = [0usize; 8];
+        for _ in 0..80_000 {
+            let (x, _, i) = d.sample_continuous(r.next_f32());
+            assert!((i as f32 / 4.0..(i + 1) as f32 / 4.0).contains(&x), "{x} in bin {i}");
+            halves[(x * 8.0) as usize] += 1;
+        }
+        for (h, &c) in halves.iter().enumerate() {
+            let want = d.discrete_pdf(h / 2) as f64 / 2.0;
+            assert!((c as f64 / 80_000.0 - want).abs() < 0.01, "half {h}: {c}");
+        }
+        // Many bins of uneven weight, zeros among them: every bin's share.
+        let w: Vec<f32> = (0..257).map(|i| ((i * 37) % 11) as f32).collect();
+        let d = Distribution1D::new(&w);
+        let mut counts = vec![0usize; w.len()];
+        let n = 400_000;
+        for k in 0..n {
+            counts[d.sample_discrete((k as f32 + 0.5) / n as f32).0] += 1;
+        }
+        for (i, &c) in counts.iter().enumerate() {
+            let want = d.discrete_pdf(i) as f64;
+            assert!((c as f64 / n as f64 - want).abs() < 2e-4, "bin {i}: {c} vs {want}");
+        }
     }
 
     #[test]
