@@ -49,10 +49,17 @@ fn export_then_render_the_glb_then_compare() {
             "24",
             "--spp",
             "4",
+            "--json",
             "-o",
             out.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
+        // The rate with and without the set-up (BVH, light tables) before tracing.
+        let v: serde_json::Value =
+            serde_json::from_str(stdout(&o).lines().last().unwrap()).unwrap();
+        let (all, trace) = (&v["msamples_per_s"], &v["trace_msamples_per_s"]);
+        assert!(v["setup_seconds"].as_f64().unwrap() >= 0.0, "{v}");
+        assert!(trace.as_f64().unwrap() >= all.as_f64().unwrap() && all.as_f64().unwrap() > 0.0);
     }
     // The exported scene renders exactly like the built-in one (same seed, same geometry).
     let o = lightlab(&[

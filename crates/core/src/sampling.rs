@@ -325,7 +325,6 @@ impl Distribution1D {
     pub fn density(&self, i: usize) -> f32 {
         (self.func[i] as f64 / self.integral) as f32
     }
-
 }
 
 /// Vose's alias table for the bins' probabilities (the CDF's steps): each of the n slots holds
@@ -502,13 +501,19 @@ mod tests {
         assert_eq!(counts[2], 0, "zero-weight bin must never be chosen");
         assert!((counts[3] as f64 / 80_000.0 - 0.5).abs() < 0.01);
         let (x, pdf, i) = d.sample_continuous(0.99);
-        assert!((i as f32 / 4.0..(i + 1) as f32 / 4.0).contains(&x), "{x} in bin {i}");
+        assert!(
+            (i as f32 / 4.0..(i + 1) as f32 / 4.0).contains(&x),
+            "{x} in bin {i}"
+        );
         assert!((pdf - d.density(i)).abs() < 1e-6);
         // Continuous samples: the bins' shares, spread evenly inside each (halves of bins).
         let mut halves = [0usize; 8];
         for _ in 0..80_000 {
             let (x, _, i) = d.sample_continuous(r.next_f32());
-            assert!((i as f32 / 4.0..(i + 1) as f32 / 4.0).contains(&x), "{x} in bin {i}");
+            assert!(
+                (i as f32 / 4.0..(i + 1) as f32 / 4.0).contains(&x),
+                "{x} in bin {i}"
+            );
             halves[(x * 8.0) as usize] += 1;
         }
         for (h, &c) in halves.iter().enumerate() {
@@ -525,7 +530,10 @@ mod tests {
         }
         for (i, &c) in counts.iter().enumerate() {
             let want = d.discrete_pdf(i) as f64;
-            assert!((c as f64 / n as f64 - want).abs() < 2e-4, "bin {i}: {c} vs {want}");
+            assert!(
+                (c as f64 / n as f64 - want).abs() < 2e-4,
+                "bin {i}: {c} vs {want}"
+            );
         }
     }
 
