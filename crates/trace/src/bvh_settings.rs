@@ -1,6 +1,6 @@
 //! How the BVH is built: obvhs's PLOC builder (the only builder the crate offers besides
 //! insertion) with its presets, and lightlab's leaf size and collapse cost. The default is the
-//! setting measured fastest for incoherent rays on the scenes of `docs/reference-path-tracer.md`;
+//! setting chosen by incoherent rays' speed on the scenes of `docs/reference-path-tracer.md`;
 //! `lightlab bench trace --bvh SETTING` compares others.
 
 use obvhs::BvhBuildParams;
@@ -41,10 +41,11 @@ pub enum BvhSettingsError {
 
 impl Default for BvhSettings {
     /// obvhs's `slow` preset with every node tried for reinsertion, before and after the
-    /// collapse (`slow:reinsert=1,post=1`), leaves of up to 16 triangles and collapse cost 4:
-    /// the fastest for incoherent rays on prt and bush of the settings compared with
-    /// `bench/trace_vs_embree.py --bvh`, and as fast as `slow` on cornell, where `very-slow`'s
-    /// PLOC depth threshold of 1 costs 14 % (docs/reference-path-tracer.md).
+    /// collapse (`slow:reinsert=1,post=1`), leaves of up to 16 triangles and collapse cost 4.
+    /// Of the settings compared with `bench/trace_vs_embree.py --bvh`, it is as fast as
+    /// `very-slow` on prt and bush for incoherent rays (within noise, 5 % faster than `slow`)
+    /// and as fast as `slow` on cornell, where `very-slow`'s PLOC depth threshold of 1 costs
+    /// 14 % (docs/reference-path-tracer.md).
     fn default() -> Self {
         BvhSettings {
             params: BvhBuildParams {
