@@ -544,27 +544,14 @@ fn bench_trace_reports_json() {
         assert!(v[k].as_f64().unwrap() > 0.0, "{k}");
     }
     // Another BVH setting traces the same scene; a malformed one is refused with the keys.
-    let o = lightlab(&[
-        "bench",
-        "trace",
-        "--scene",
-        "cornell",
-        "--rays",
-        "2000",
-        "--bvh",
-        "fast:leaf=4",
-    ]);
+    let with_bvh = |bvh| {
+        lightlab(&[
+            "bench", "trace", "--scene", "cornell", "--rays", "2000", "--bvh", bvh,
+        ])
+    };
+    let o = with_bvh("fast:leaf=4");
     assert!(o.status.success(), "{}", stderr(&o));
-    let o = lightlab(&[
-        "bench",
-        "trace",
-        "--scene",
-        "cornell",
-        "--rays",
-        "2000",
-        "--bvh",
-        "slow:leaves=4",
-    ]);
+    let o = with_bvh("slow:leaves=4");
     assert!(!o.status.success());
     assert!(stderr(&o).contains("expected key=value"), "{}", stderr(&o));
 }

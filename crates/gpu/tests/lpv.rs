@@ -735,6 +735,32 @@ fn far_share_around(p: Vec3, up: f32, boxes: &[(Vec3, Vec3)], radius: f32) -> f3
     far as f32 / (n * n) as f32
 }
 
+/// The volume's indirect light (debug view) of `scene` under a uniform sky, `size`², with near
+/// occlusion and without, and its reach [m].
+fn near_occlusion_on_and_off(ctx: &GpuContext, scene: &Scene, size: u32) -> (Image, Image, f32) {
+    let render = |near_occlusion| {
+        let s = LpvSettings {
+            near_occlusion,
+            ..Default::default()
+        };
+        let rs = RasterSettings {
+            width: size,
+            height: size,
+            shadows: ShadowMethod::None,
+            ambient: Ambient::Constant(Vec3::ONE),
+            ..Default::default()
+        };
+        let mut r = Renderer::with_lpv(ctx, scene, rs, &s, true).unwrap();
+        let radius = r.lpv().unwrap().near_occlusion_radius();
+        r.render(ctx);
+        (r.read_hdr(ctx).unwrap(), radius)
+    };
+    let (on, radius) = render(true);
+    let (off, none) = render(false);
+    assert_eq!(none, 0.0, "no reach without near occlusion");
+    (on, off, radius)
+}
+
 #[test]
 fn a_leafs_light_through_its_back_keeps_its_back_hemispheres_share() {
     // A 2 m double-sided leaf that lets all light through (diffuse transmission 1), 2.5 m over
@@ -773,25 +799,7 @@ fn a_leafs_light_through_its_back_keeps_its_back_hemispheres_share() {
         Vec3::Y,
         0.5,
     ));
-    let render = |near_occlusion| {
-        let s = LpvSettings {
-            near_occlusion,
-            ..Default::default()
-        };
-        let rs = RasterSettings {
-            width: 48,
-            height: 48,
-            shadows: ShadowMethod::None,
-            ambient: Ambient::Constant(Vec3::ONE),
-            ..Default::default()
-        };
-        let mut r = Renderer::with_lpv(&ctx, &scene, rs, &s, true).unwrap();
-        let radius = r.lpv().unwrap().near_occlusion_radius();
-        r.render(&ctx);
-        (r.read_hdr(&ctx).unwrap(), radius)
-    };
-    let (on, radius) = render(true);
-    let (off, _) = render(false);
+    let (on, off, radius) = near_occlusion_on_and_off(&ctx, &scene, 48);
     let cam = scene.default_camera().unwrap();
     let ground = (Vec3::new(-5.0, -0.01, -5.0), Vec3::new(5.0, 0.0, 5.0));
     let lum = lightlab_core::color::luminance;
@@ -862,26 +870,7 @@ fn the_volumes_light_comes_only_from_surfaces_beyond_the_lookup() {
         Vec3::Y,
         1.0,
     ));
-    let render = |near_occlusion| {
-        let s = LpvSettings {
-            near_occlusion,
-            ..Default::default()
-        };
-        let rs = RasterSettings {
-            width: 64,
-            height: 64,
-            shadows: ShadowMethod::None,
-            ambient: Ambient::Constant(Vec3::ONE),
-            ..Default::default()
-        };
-        let mut r = Renderer::with_lpv(&ctx, &scene, rs, &s, true).unwrap();
-        let radius = r.lpv().unwrap().near_occlusion_radius();
-        r.render(&ctx);
-        (r.read_hdr(&ctx).unwrap(), radius)
-    };
-    let (on, radius) = render(true);
-    let (off, none) = render(false);
-    assert_eq!(none, 0.0);
+    let (on, off, radius) = near_occlusion_on_and_off(&ctx, &scene, 64);
     assert!((1.4..2.0).contains(&radius), "{radius}");
     // Each pixel's ground point: its camera ray meets y = 0 before either box.
     let cam = scene.default_camera().unwrap();
