@@ -163,7 +163,7 @@ pub fn run(cmd: BenchCommand) -> Result<()> {
             bvh,
             load,
             json,
-        } => bench_trace((&scene, &load), json, rays, dump, (opaque, bvh)),
+        } => bench_trace((&scene, &load), json, rays, dump, opaque, bvh),
         BenchCommand::Bake {
             scene,
             bake,
@@ -324,7 +324,8 @@ fn bench_trace(
     json: bool,
     n: usize,
     dump_dir: Option<std::path::PathBuf>,
-    (opaque, bvh): (bool, lightlab_trace::BvhSettings),
+    opaque: bool,
+    bvh: lightlab_trace::BvhSettings,
 ) -> Result<()> {
     anyhow::ensure!(
         (1..=100_000_000).contains(&n),
