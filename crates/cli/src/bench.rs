@@ -51,7 +51,8 @@ pub enum BenchCommand {
         /// How the BVH is built: PRESET[:KEY=VALUE,...], PRESET one of very-fast, fast,
         /// medium, slow, very-slow (obvhs's, with leaves of up to 16 triangles and collapse
         /// cost 4) or default; keys search (1, 2, 6, 14, 24, 32), depth, reinsert, post, leaf
-        /// (1–16), collapse, presplit (true/false).
+        /// (1–16), collapse, presplit (true/false), and the 8-wide collapse's costs node and
+        /// block (of a node visit and of a block of eight triangle tests; default 1 and 1).
         #[arg(long, default_value = "default")]
         bvh: lightlab_trace::BvhSettings,
         #[command(flatten)]

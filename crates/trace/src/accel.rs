@@ -187,7 +187,7 @@ impl Accel {
                 }));
             }
         }
-        let bvh = Bvh8::build(&tris, bvh.params, |i| alpha_of[i].is_some());
+        let bvh = Bvh8::build(&tris, bvh.params, bvh.wide, |i| alpha_of[i].is_some());
         // Per slot: the triangle, where it came from and its alpha record (pre-splits may put
         // one triangle in several leaves; unused slots get a degenerate triangle no ray hits).
         let unused = Triangle {

@@ -1,8 +1,10 @@
 //! How the BVH is built: obvhs's PLOC builder (the only builder the crate offers besides
-//! insertion) with its presets, and lightlab's leaf size and collapse cost. The default is the
+//! insertion) with its presets, and lightlab's leaf size and collapse cost, for the binary
+//! tree; the cost model of its collapse into 8-wide nodes ([`crate::bvh8`]). The default is the
 //! setting chosen by incoherent rays' speed on the scenes of `docs/reference-path-tracer.md`;
 //! `lightlab bench trace --bvh SETTING` compares others.
 
+use crate::bvh8::WideCosts;
 use obvhs::BvhBuildParams;
 use obvhs::ploc::PlocSearchDistance;
 use std::str::FromStr;
@@ -13,10 +15,14 @@ use std::str::FromStr;
 /// `search` (PLOC's pairing distance: 1, 2, 6, 14, 24 or 32), `depth` (below it the distance
 /// is 1), `reinsert` (share of nodes tried for reinsertion), `post` (the post-collapse pass,
 /// × reinsert), `leaf` (triangles per binary leaf, 1–16), `collapse` (the collapse's
-/// traversal cost), `presplit` (true/false).
+/// traversal cost), `presplit` (true/false); and two of the collapse into 8-wide nodes:
+/// `node` and `block`, the costs of a node visit and of a block of eight triangle tests.
 #[derive(Clone, Copy, Debug)]
 pub struct BvhSettings {
+    /// The binary tree's build (obvhs).
     pub params: BvhBuildParams,
+    /// The cost model that collapses it into 8-wide nodes.
+    pub wide: WideCosts,
 }
 
 /// A setting that does not parse.
@@ -28,7 +34,7 @@ pub enum BvhSettingsError {
     )]
     Preset(String),
     #[error(
-        "BVH setting `{0}`: expected key=value (search, depth, reinsert, post, leaf, collapse, presplit)"
+        "BVH setting `{0}`: expected key=value (search, depth, reinsert, post, leaf, collapse, presplit, node, block)"
     )]
     Pair(String),
     #[error("BVH setting `{key}`: `{value}` is not {expected}")]
@@ -53,6 +59,7 @@ impl Default for BvhSettings {
                 post_collapse_reinsertion_batch_ratio_multiplier: 1.0,
                 ..lightlab_preset(BvhBuildParams::slow_build())
             },
+            wide: WideCosts::default(),
         }
     }
 }
@@ -70,6 +77,7 @@ impl FromStr for BvhSettings {
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let (preset, rest) = s.split_once(':').unwrap_or((s, ""));
+        let mut wide = WideCosts::default();
         let mut params = match preset.trim() {
             "default" => BvhSettings::default().params,
             "very-fast" => lightlab_preset(BvhBuildParams::very_fast_build()),
@@ -87,6 +95,13 @@ impl FromStr for BvhSettings {
                 key: key.to_string(),
                 value: value.to_string(),
                 expected,
+            };
+            let positive = || {
+                value
+                    .parse::<f32>()
+                    .ok()
+                    .filter(|v| v.is_finite() && *v > 0.0)
+                    .ok_or_else(|| bad("a number > 0"))
             };
             let ratio = || {
                 value
@@ -122,10 +137,12 @@ impl FromStr for BvhSettings {
                 }
                 "collapse" => params.collapse_traversal_cost = ratio()?,
                 "presplit" => params.pre_split = value.parse().map_err(|_| bad("true or false"))?,
+                "node" => wide.node = positive()?,
+                "block" => wide.block = positive()?,
                 _ => return Err(BvhSettingsError::Pair(pair.to_string())),
             }
         }
-        Ok(BvhSettings { params })
+        Ok(BvhSettings { params, wide })
     }
 }
 
@@ -147,6 +164,12 @@ mod tests {
         assert!(matches!(p.ploc_search_distance, PlocSearchDistance::Low));
         assert!(!p.pre_split);
         assert_eq!(p.reinsertion_batch_ratio, 1.0);
+        let w = "slow:block=0.6,node=2".parse::<BvhSettings>().unwrap().wide;
+        assert_eq!((w.node, w.block), (2.0, 0.6));
+        assert!(matches!(
+            "slow:block=0".parse::<BvhSettings>(),
+            Err(BvhSettingsError::Value { .. })
+        ));
         let p = "fast".parse::<BvhSettings>().unwrap().params;
         assert_eq!(p.max_prims_per_leaf, 16);
         assert!(matches!(
