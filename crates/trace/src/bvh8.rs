@@ -855,7 +855,7 @@ mod tests {
         assert!(
             leaves
                 .map(|c| (c & 3) + 1)
-                .all(|b| b as u32 * LANES as u32 <= MAX_LEAF)
+                .all(|b| b * LANES as u32 <= MAX_LEAF)
         );
     }
 }
