@@ -849,7 +849,11 @@ impl Environment {
     /// Radiance arriving from direction `d` (nearest texel; the map is assumed smooth or
     /// sampled with matching importance).
     pub fn radiance(&self, d: Vec3) -> Vec3 {
-        let uv = Self::dir_to_uv(d);
+        self.radiance_uv(Self::dir_to_uv(d))
+    }
+
+    /// Radiance at equirectangular `uv` (nearest texel), for callers that hold the uv already.
+    pub fn radiance_uv(&self, uv: Vec2) -> Vec3 {
         let x = ((uv.x * self.image.width as f32) as u32).min(self.image.width - 1);
         let y = ((uv.y * self.image.height as f32) as u32).min(self.image.height - 1);
         self.image.get(x, y) * self.intensity

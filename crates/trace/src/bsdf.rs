@@ -177,10 +177,9 @@ impl Bsdf {
         };
         let model = material.brdf;
         let specular = model != BrdfModel::Lambert && (metallic > 0.0 || material.specular > 0.0);
-        let fd = schlick(wo_z, Vec3::splat(f0d)).x;
         let kd_scale = (1.0 - metallic)
             * if material.specular > 0.0 && model == BrdfModel::Pbr {
-                1.0 - fd
+                1.0 - schlick(wo_z, Vec3::splat(f0d)).x
             } else {
                 1.0
             };
@@ -192,7 +191,11 @@ impl Bsdf {
         } else {
             luminance(f0)
         };
-        let wd = luminance(base) * kd_scale;
+        let wd = if specular {
+            luminance(base) * kd_scale
+        } else {
+            0.0
+        };
         let p_spec = if !specular {
             0.0
         } else if wd <= 0.0 {
@@ -219,7 +222,15 @@ impl Bsdf {
             alpha,
             specular,
             model,
-            exponent: BrdfModel::exponent(roughness),
+            // Read by the classical lobes only (`classic`); a power function per hit else.
+            exponent: if matches!(
+                model,
+                BrdfModel::Phong | BrdfModel::BlinnPhong | BrdfModel::Banks | BrdfModel::Lafortune
+            ) {
+                BrdfModel::exponent(roughness)
+            } else {
+                1.0
+            },
             anisotropy: material.anisotropy.clamp(0.0, 1.0),
             lafortune: material.lafortune,
             p_spec,
@@ -303,8 +314,33 @@ impl Bsdf {
         self.delta > 0.0 && !self.thin && self.alpha >= ROUGH_INTERFACE * ROUGH_INTERFACE
     }
 
+    /// Whether only the diffuse lobes are present (reflection and thin transmission): the
+    /// most common material takes the short paths of [`Self::eval`], [`Self::pdf`] and
+    /// [`Self::sample`], which give the general code's results bit for bit.
+    #[inline]
+    fn diffuse_only(&self) -> bool {
+        !self.specular && self.delta == 0.0 && self.model != BrdfModel::Banks
+    }
+
+    /// The diffuse lobes' value and density for `wi`.
+    #[inline]
+    fn diffuse(&self, wi: Vec3) -> (Vec3, f32) {
+        let f = self.base * (self.kd_scale / PI);
+        if wi.z > 0.0 {
+            (
+                f * (1.0 - self.transmission),
+                (1.0 - self.transmission) * wi.z / PI,
+            )
+        } else {
+            (f * self.transmission, self.transmission * -wi.z / PI)
+        }
+    }
+
     /// BSDF value f(wo, wi) (without the cosine; a smooth interface's delta excluded).
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        if self.diffuse_only() {
+            return self.diffuse(wi).0;
+        }
         let mut f = self.eval_smooth(wo, wi) * (1.0 - self.delta);
         if self.rough_interface() {
             f += self.interface_eval(wo, wi) * self.delta;
@@ -424,6 +460,9 @@ impl Bsdf {
 
     /// Density of [`Self::sample`] choosing `wi` (solid angle).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if self.diffuse_only() {
+            return self.diffuse(wi).1;
+        }
         let mut p = self.pdf_smooth(wo, wi) * (1.0 - self.delta);
         if self.rough_interface() {
             p += self.interface_pdf(wo, wi) * self.delta;
@@ -450,6 +489,14 @@ impl Bsdf {
 
     /// Sample an incident direction: (wi, f, pdf), or None when the sample is invalid.
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
+        if self.diffuse_only() {
+            let mut wi = cosine_hemisphere(u);
+            if u_lobe < self.transmission {
+                wi.z = -wi.z;
+            }
+            let (f, pdf) = self.diffuse(wi);
+            return (pdf > 0.0 && pdf.is_finite()).then_some((wi, f, pdf));
+        }
         let wi = if u_lobe < self.delta {
             if !self.rough_interface() {
                 return self.sample_interface(wo, u_lobe / self.delta);
@@ -793,5 +840,32 @@ mod tests {
         let f_back = b.eval(Vec3::Z, -Vec3::Z);
         assert!((f_front.x - 0.75 / PI).abs() < 1e-6);
         assert!((f_back.x - 0.25 / PI).abs() < 1e-6);
+    }
+
+    /// The diffuse-only short paths give what the general code gives, bit for bit.
+    #[test]
+    fn the_diffuse_short_paths_match_the_general_code() {
+        let mut rng = Rng::new(9, 0);
+        for t in [0.0, 0.3] {
+            let m = Material {
+                base_color: Vec4::new(0.6, 0.4, 0.2, 1.0),
+                transmission: t,
+                specular: 0.0,
+                ..Default::default()
+            };
+            let b = bsdf(m, 0.8);
+            assert!(b.diffuse_only());
+            for _ in 0..1000 {
+                let wo = uniform_sphere(rng.next_vec2());
+                let wo = Vec3::new(wo.x, wo.y, wo.z.abs());
+                let wi = uniform_sphere(rng.next_vec2());
+                assert_eq!(b.eval(wo, wi), b.eval_smooth(wo, wi) * (1.0 - b.delta));
+                assert_eq!(b.pdf(wo, wi), b.pdf_smooth(wo, wi) * (1.0 - b.delta));
+                let (u_lobe, u) = (rng.next_f32(), rng.next_vec2());
+                let wi = b.sample_base(wo, u_lobe, u).unwrap();
+                let general = (wi, b.eval_smooth(wo, wi), b.pdf_smooth(wo, wi));
+                assert_eq!(b.sample(wo, u_lobe, u), Some(general));
+            }
+        }
     }
 }

@@ -20,6 +20,8 @@ pub struct EmitTri {
     pub area: f32,
     pub material: usize,
     pub double_sided: bool,
+    /// The emitted radiance where it is uniform (no emissive texture), else None.
+    pub uniform: Option<Vec3>,
 }
 
 /// Everything needed to sample and evaluate light in the scene.
@@ -76,6 +78,7 @@ impl LightSet {
                     area: 0.5 * c.length(),
                     material: mesh.material,
                     double_sided: mat.double_sided,
+                    uniform: mat.emissive_texture.is_none().then(|| mat.emission()),
                 });
             }
         }
@@ -151,8 +154,10 @@ impl LightSet {
         if cos_l <= 0.0 && !e.double_sided {
             return None;
         }
-        let uv = lightlab_scene::Attrs::weighted(&e.uv, [1.0 - b.x - b.y, b.x, b.y]);
-        let le = emission(scene, e.material, uv);
+        let le = e.uniform.unwrap_or_else(|| {
+            let uv = lightlab_scene::Attrs::weighted(&e.uv, [1.0 - b.x - b.y, b.x, b.y]);
+            emission(scene, e.material, uv)
+        });
         let pdf = p_sel / e.area * dist2 / cos_l.abs().max(1e-8);
         Some(LightSample {
             wi,
@@ -175,20 +180,31 @@ impl LightSet {
         Some(LightSample {
             wi,
             dist: f32::INFINITY,
-            value: env.radiance(wi) / pdf,
+            // The sampled texel itself (no round trip through the direction).
+            value: env.radiance_uv(uv) / pdf,
             pdf,
         })
     }
 
     /// Solid-angle pdf of [`Self::sample_env`] for direction `wi`.
     pub fn env_pdf(&self, wi: Vec3) -> f32 {
+        self.env_pdf_uv(Environment::dir_to_uv(wi))
+    }
+
+    fn env_pdf_uv(&self, uv: Vec2) -> f32 {
         let Some(d) = &self.env_dist else { return 0.0 };
-        let uv = Environment::dir_to_uv(wi);
         let sin = (uv.y * PI).sin();
         if sin <= 0.0 {
             return 0.0;
         }
         d.pdf(uv) / (2.0 * PI * PI * sin)
+    }
+
+    /// The environment's radiance along `wi` and [`Self::env_pdf`] of `wi`, from one
+    /// direction-to-uv conversion (a path that escapes needs both).
+    pub fn env_lookup(&self, env: &Environment, wi: Vec3) -> (Vec3, f32) {
+        let uv = Environment::dir_to_uv(wi);
+        (env.radiance_uv(uv), self.env_pdf_uv(uv))
     }
 }
 

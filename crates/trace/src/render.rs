@@ -432,9 +432,9 @@ impl<'a> PathTracer<'a> {
                 if let Some(env) = &scene.environment
                     && keep(depth)
                 {
-                    let le = env.radiance(d);
+                    let (le, env_pdf) = self.lights.env_lookup(env, d);
                     let w = if prev_pdf > 0.0 {
-                        power_heuristic(prev_pdf, self.lights.env_pdf(d))
+                        power_heuristic(prev_pdf, env_pdf)
                     } else {
                         1.0
                     };
@@ -675,7 +675,9 @@ impl<'a> PathTracer<'a> {
                             );
                             let (o, dir, weight) = match &s.lens {
                                 CameraModel::Pinhole => {
-                                    (origin, cam.ray_direction(ndc, aspect), 1.0)
+                                    // `Camera::ray_direction` with its tangent computed once.
+                                    let d = cam.transform.transform_vector3(pinhole(ndc));
+                                    (origin, d.normalize(), 1.0)
                                 }
                                 CameraModel::ThinLens(l) => {
                                     let (o, d) = l.ray(pinhole(ndc), rng.next_vec2());
