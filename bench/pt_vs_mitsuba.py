@@ -31,8 +31,10 @@ normal, lightlab shades with the geometric normal and Mitsuba returns black, so 
 low-poly knot came out 6 % and the normal-mapped dunes 1.8 % brighter in lightlab (256², 64
 spp) and the two images did not converge to each other. Without them they agree within noise
 (the sky, the plane and the knots within 0.1-1 % in the mean).
+Timing on a shared 2-core machine moves by 10-20 % from one pair of runs to the next: `--repeat K`
+runs K timed pairs, alternated, and reports the pair with the median ratio, [min-max] beside it.
 Usage: python3 bench/pt_vs_mitsuba.py [--scene cornell|prt] [--size 256] [--spp 64] [--max-depth 8]
-       [--variant llvm_ad_rgb|scalar_rgb] [--no-check] [--json]
+       [--variant llvm_ad_rgb|scalar_rgb] [--repeat K] [--no-check] [--json]
 Installs mitsuba and numpy into bench/.venv on first use.
 """
 import argparse, glob, json, math, os, struct, subprocess, sys, tempfile, time
@@ -48,6 +50,8 @@ def main():
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--variant", default="llvm_ad_rgb", choices=["llvm_ad_rgb", "scalar_rgb"])
     ap.add_argument("--no-check", action="store_true", help="skip the 4x-samples convergence check")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="timed pairs (lightlab then Mitsuba); the median pair's figures are reported")
     ap.add_argument("--shading-normals", action="store_true",
                     help="keep vertex normals and normal maps (the renderers then disagree, see above)")
     ap.add_argument("--json", action="store_true")
@@ -83,7 +87,11 @@ def main():
             cmp = json.loads(subprocess.check_output([exe, "compare", ours_exr, theirs_exr, "--json"]).decode().strip().splitlines()[-1])
             return ours, theirs, cmp
 
-        ours, theirs, cmp = pair(args.spp, "")
+        pairs = [pair(args.spp, "") for _ in range(args.repeat)]
+        ratios = sorted(o["trace_msamples_per_s"] / t["msamples_per_s"] for o, t, _ in pairs)
+        # The pair whose ratio is the median (the lower middle one for an even count).
+        ours, theirs, cmp = next(p for p in pairs
+                                 if p[0]["trace_msamples_per_s"] / p[1]["msamples_per_s"] == ratios[(len(ratios) - 1) // 2])
         check = None if args.no_check else pair(4 * args.spp, "4x")[2]
     ours_sps = ours["trace_msamples_per_s"]
     res = {
@@ -93,14 +101,15 @@ def main():
         "lightlab_setup_seconds": ours["setup_seconds"],
         "lightlab_msamples_per_s_with_setup": ours["msamples_per_s"],
         "mitsuba_msamples_per_s": theirs["msamples_per_s"], "mitsuba_seconds": theirs["seconds"],
-        "ratio": ours_sps / theirs["msamples_per_s"],
+        "ratio": ours_sps / theirs["msamples_per_s"], "ratios": ratios,
         "relmse_lightlab_vs_mitsuba": cmp["relmse"], "flip_lightlab_vs_mitsuba": cmp["flip"],
     }
     print(f"{args.scene} {args.size}x{args.size}, {args.spp} spp, max depth {args.max_depth} (Mitsuba {args.max_depth + 1}), all threads")
     print(f"  lightlab {ours_sps:7.3f} Msamples/s ({ours['seconds']:.2f} s, of which BVH and light tables "
           f"{ours['setup_seconds']:.2f} s; {ours['msamples_per_s']:.3f} Msamples/s with them)")
     print(f"  Mitsuba  {theirs['msamples_per_s']:7.3f} Msamples/s ({theirs['seconds']:.2f} s, {args.variant})")
-    print(f"  ratio lightlab/Mitsuba {res['ratio']:.2f}x")
+    spread = f" (median of {len(ratios)} pairs, [{ratios[0]:.2f}-{ratios[-1]:.2f}])" if len(ratios) > 1 else ""
+    print(f"  ratio lightlab/Mitsuba {res['ratio']:.2f}x{spread}")
     print(f"  relMSE lightlab vs Mitsuba {cmp['relmse']:.5f}, FLIP {cmp['flip']:.4f}")
     failed = False
     if check is not None:
