@@ -304,6 +304,7 @@ impl Distribution1D {
     }
 
     /// Sample a bin: (index, probability of that bin).
+    #[inline]
     pub fn sample_discrete(&self, u: f32) -> (usize, f32) {
         // `pick`'s bin without the position inside it (which costs a division).
         let n = self.alias.len();

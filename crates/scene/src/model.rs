@@ -59,8 +59,25 @@ impl Mesh {
     /// (zeros where the mesh has no UV0, white where it has no colours).
     #[inline]
     pub fn uv_at(&self, idx: [usize; 3], bw: [f32; 3]) -> Attrs {
+        // `Attrs::weighted` over `attrs_of` the three corners, without the sets the mesh lacks
+        // (the path tracer calls this at every hit): the same values, bit for bit.
         let [a, b, c] = idx;
-        Attrs::weighted(&[self.attrs_of(a), self.attrs_of(b), self.attrs_of(c)], bw)
+        let lerp = |v: &[Vec2]| {
+            let at = |i: usize| v.get(i).copied().unwrap_or_default();
+            at(a) * bw[0] + at(b) * bw[1] + at(c) * bw[2]
+        };
+        let uv0 = lerp(&self.uv0);
+        let uv1 = self.uv1.as_deref().map_or(uv0, lerp);
+        let color = if self.colors.is_empty() {
+            Vec4::splat(bw[0] + bw[1] + bw[2])
+        } else {
+            let at = |i: usize| self.colors.get(i).copied().unwrap_or(Vec4::ONE);
+            at(a) * bw[0] + at(b) * bw[1] + at(c) * bw[2]
+        };
+        Attrs {
+            uv: [uv0, uv1],
+            color,
+        }
     }
 
     /// The attributes of vertex `i`.
@@ -1085,6 +1102,31 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn uv_at_matches_the_weighted_corners() {
+        let base = Mesh {
+            positions: vec![Vec3::ZERO; 3],
+            uv0: vec![
+                Vec2::new(0.1, 0.2),
+                Vec2::new(0.7, 0.3),
+                Vec2::new(0.4, 0.9),
+            ],
+            ..Default::default()
+        };
+        let with_sets = Mesh {
+            uv1: Some(vec![Vec2::new(0.5, 0.5), Vec2::new(0.2, 0.8)]),
+            colors: vec![Vec4::new(0.3, 0.6, 0.9, 1.0); 3],
+            ..base.clone()
+        };
+        for mesh in [base, with_sets] {
+            for bw in [[0.2, 0.3, 0.5], [1.0 / 3.0; 3], [0.7, 0.29999, 1e-5]] {
+                let want =
+                    Attrs::weighted(&[mesh.attrs_of(0), mesh.attrs_of(1), mesh.attrs_of(2)], bw);
+                assert_eq!(mesh.uv_at([0, 1, 2], bw), want);
+            }
+        }
+    }
 
     #[test]
     fn uv_transforms_follow_the_extension_matrix() {

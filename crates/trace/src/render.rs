@@ -196,8 +196,13 @@ pub fn surface(scene: &Scene, accel: &Accel, hit: &Hit) -> Surface {
     }
     let uv = mesh.uv_at(idx, [b0, b1, b2]);
     let material = mesh.material;
-    let ns = normal_mapped(scene, inst, mesh, idx, [b0, b1, b2], uv, ns, ng);
     let m = &scene.materials[material];
+    // (The test before the call saves passing its arguments where there is no normal map.)
+    let ns = if m.normal_texture.is_some() {
+        normal_mapped(scene, inst, mesh, idx, [b0, b1, b2], uv, ns, ng)
+    } else {
+        ns
+    };
     let tangent = if m.brdf.uses_tangent() && mesh.tangents.len() == mesh.positions.len() {
         let tg =
             mesh.tangents[idx[0]] * b0 + mesh.tangents[idx[1]] * b1 + mesh.tangents[idx[2]] * b2;
