@@ -307,10 +307,7 @@ impl Distribution1D {
     #[inline]
     pub fn sample_discrete(&self, u: f32) -> (usize, f32) {
         // `pick`'s bin without the position inside it (which costs a division).
-        let n = self.alias.len();
-        let x = (u as f64).clamp(0.0, 1.0) * n as f64;
-        let slot = (x as usize).min(n - 1);
-        let f = (x - slot as f64).clamp(0.0, 1.0);
+        let (slot, f) = self.slot(u);
         let (keep, other) = self.alias[slot];
         let i = if f < keep as f64 {
             slot
@@ -320,12 +317,18 @@ impl Distribution1D {
         (i, self.discrete_pdf(i))
     }
 
-    /// The alias table's bin for u ∈ [0, 1), and where in that bin the sample falls ([0, 1)).
-    fn pick(&self, u: f32) -> (usize, f64) {
+    /// The alias table's slot for u ∈ [0, 1), and where in the slot u falls ([0, 1]).
+    #[inline]
+    fn slot(&self, u: f32) -> (usize, f64) {
         let n = self.alias.len();
         let x = (u as f64).clamp(0.0, 1.0) * n as f64;
         let slot = (x as usize).min(n - 1);
-        let f = (x - slot as f64).clamp(0.0, 1.0);
+        (slot, (x - slot as f64).clamp(0.0, 1.0))
+    }
+
+    /// The alias table's bin for u ∈ [0, 1), and where in that bin the sample falls ([0, 1)).
+    fn pick(&self, u: f32) -> (usize, f64) {
+        let (slot, f) = self.slot(u);
         let (keep, other) = self.alias[slot];
         let keep = keep as f64;
         if f < keep {

@@ -436,11 +436,10 @@ impl Bsdf {
     }
 
     fn eval_smooth(&self, wo: Vec3, wi: Vec3) -> Vec3 {
-        let diffuse = self.base * (self.kd_scale / PI);
+        let mut f = self.diffuse(wi).0;
         if wi.z <= 0.0 {
-            return diffuse * self.transmission;
+            return f;
         }
-        let mut f = diffuse * (1.0 - self.transmission);
         if self.model == BrdfModel::Banks {
             // Banks's diffuse term: ⟨n', l⟩ = √(1 − ⟨l,t⟩²), the normal in the plane of l and t.
             f *= (1.0 - wi.x * wi.x).max(0.0).sqrt();
@@ -471,11 +470,7 @@ impl Bsdf {
     }
 
     fn pdf_smooth(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let pd = if wi.z > 0.0 {
-            (1.0 - self.transmission) * wi.z / PI
-        } else {
-            self.transmission * -wi.z / PI
-        };
+        let pd = self.diffuse(wi).1;
         let ps = if !(self.specular && wi.z > 0.0 && wo.z > 0.0) {
             0.0
         } else if let Some(p) = self.classic(|b| b.pdf(wo.as_dvec3(), wi.as_dvec3())) {
@@ -490,10 +485,7 @@ impl Bsdf {
     /// Sample an incident direction: (wi, f, pdf), or None when the sample is invalid.
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
         if self.diffuse_only() {
-            let mut wi = cosine_hemisphere(u);
-            if u_lobe < self.transmission {
-                wi.z = -wi.z;
-            }
+            let wi = self.diffuse_direction(u_lobe, u);
             let (f, pdf) = self.diffuse(wi);
             return (pdf > 0.0 && pdf.is_finite()).then_some((wi, f, pdf));
         }
@@ -527,13 +519,19 @@ impl Bsdf {
             }
         } else {
             // Reuse u_lobe's remaining randomness to choose front or back.
-            let u2 = (u_lobe - self.p_spec) / (1.0 - self.p_spec);
-            let mut d = cosine_hemisphere(u);
-            if u2 < self.transmission {
-                d.z = -d.z;
-            }
-            d
+            self.diffuse_direction((u_lobe - self.p_spec) / (1.0 - self.p_spec), u)
         })
+    }
+
+    /// A direction from the diffuse lobes: cosine-weighted, through the back where
+    /// `u_side < transmission`.
+    #[inline]
+    fn diffuse_direction(&self, u_side: f32, u: Vec2) -> Vec3 {
+        let mut d = cosine_hemisphere(u);
+        if u_side < self.transmission {
+            d.z = -d.z;
+        }
+        d
     }
 
     /// The smooth dielectric interface: reflect with probability F (exact Fresnel), refract
