@@ -149,7 +149,9 @@ impl LightSet {
             return None;
         }
         let dist = dist2.sqrt();
-        let wi = to / dist;
+        // One division each for the direction and the value (a vector divided by a scalar is
+        // three).
+        let wi = to * (1.0 / dist);
         let cos_l = -wi.dot(e.n);
         if cos_l <= 0.0 && !e.double_sided {
             return None;
@@ -158,11 +160,11 @@ impl LightSet {
             let uv = lightlab_scene::Attrs::weighted(&e.uv, [1.0 - b.x - b.y, b.x, b.y]);
             emission(scene, e.material, uv)
         });
-        let pdf = p_sel / e.area * dist2 / cos_l.abs().max(1e-8);
+        let pdf = p_sel * dist2 / (e.area * cos_l.abs().max(1e-8));
         Some(LightSample {
             wi,
             dist,
-            value: le / pdf,
+            value: le * (1.0 / pdf),
             pdf,
         })
     }
