@@ -52,17 +52,20 @@ fn the_gpu_thin_and_thick_lenses_match_the_traced_ones() {
         run(&size, &[&traced[..], &lens].concat(), &reference);
         run(
             &size,
-            &[&GPU[..], &lens, &["--lens-samples", "64"]].concat(),
+            &[&GPU[..], &lens, &["--lens-samples", "16"]].concat(),
             &gpu,
         );
         let (e_lens, e_pinhole) = (relmse(&gpu, &reference), relmse(&pinhole, &reference));
         eprintln!(
-            "relMSE against the traced {model}: GPU (64 samples) {e_lens:.2e}, GPU pinhole \
+            "relMSE against the traced {model}: GPU (16 samples) {e_lens:.2e}, GPU pinhole \
              {e_pinhole:.2e}"
         );
+        // Each sample point is a full frame on lavapipe: 16 of them cost a quarter of the 64
+        // this test used to take, and still measure well inside both bounds (see the closing
+        // figures in docs/lens-systems.md).
         assert!(e_lens <= 0.01, "{model}: relMSE {e_lens}");
         assert!(
-            e_lens < e_pinhole / 3.0,
+            e_lens < e_pinhole / 4.0,
             "{model}: the lens changes little: {e_lens} vs {e_pinhole}"
         );
     }
@@ -97,19 +100,18 @@ fn the_image_based_model_matches_the_traced_lenses() {
         let lens_args = ["--camera-model", model.as_str()];
         let traced = ["--technique", "direct", "--spp", "256"];
         run(&size, &[&traced[..], &lens_args].concat(), &p("ref.exr"));
-        for n in ["64", "10"] {
+        // 24 and 8 points: a third of the cost of the 64 and 10 this test used to take.
+        for n in ["24", "8"] {
             let args = [&GPU[..], &lens_args, &["--lens-samples", n]].concat();
             run(&size, &args, &p(&format!("{n}.exr")));
         }
-        let e64 = relmse(&p("64.exr"), &p("ref.exr"));
-        let e10 = relmse(&p("10.exr"), &p("ref.exr"));
-        eprintln!(
-            "{lens}: relMSE against the traced lens: 64 sample points {e64:.2e}, 10 {e10:.2e}"
-        );
-        assert!(e64 <= 0.01, "{lens}: {e64}");
+        let e24 = relmse(&p("24.exr"), &p("ref.exr"));
+        let e8 = relmse(&p("8.exr"), &p("ref.exr"));
+        eprintln!("{lens}: relMSE against the traced lens: 24 sample points {e24:.2e}, 8 {e8:.2e}");
+        assert!(e24 <= 0.01, "{lens}: {e24}");
         assert!(
-            e64 < e10,
-            "{lens}: more sample points converge: {e64} vs {e10}"
+            e24 < 0.8 * e8,
+            "{lens}: more sample points converge: {e24} vs {e8}"
         );
     }
     // A prescription that is not there names the shipped lenses.
