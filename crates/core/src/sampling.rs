@@ -253,7 +253,10 @@ pub fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
 /// of its time on an environment-lit scene (two searches per environment sample).
 #[derive(Clone, Debug)]
 pub struct Distribution1D {
-    func: Vec<f32>,
+    /// Per bin, the continuous density (the weight over the integral), kept rather than
+    /// divided out at every sample: an f64 division in the environment's sampling and MIS
+    /// pdfs at every path vertex.
+    density: Vec<f32>,
     cdf: Vec<f64>,
     integral: f64,
     /// Per bin: the share of its slot it keeps, and the bin that takes the rest.
@@ -289,8 +292,9 @@ impl Distribution1D {
         }
         let integral = if integral <= 0.0 { 1.0 } else { integral };
         let alias = alias_table(&cdf);
+        let density = func.iter().map(|&f| (f as f64 / integral) as f32).collect();
         Distribution1D {
-            func,
+            density,
             cdf,
             integral,
             alias,
@@ -298,11 +302,11 @@ impl Distribution1D {
     }
 
     pub fn len(&self) -> usize {
-        self.func.len()
+        self.density.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.func.is_empty()
+        self.density.is_empty()
     }
 
     /// Integral of the piecewise-constant function over [0, 1).
@@ -355,13 +359,13 @@ impl Distribution1D {
     /// Sample a continuous position in [0, 1): (x, density at x, bin).
     pub fn sample_continuous(&self, u: f32) -> (f32, f32, usize) {
         let (i, du) = self.pick(u);
-        let x = ((i as f64 + du) / self.func.len() as f64).min(1.0 - 1e-7) as f32;
+        let x = ((i as f64 + du) / self.density.len() as f64).min(1.0 - 1e-7) as f32;
         (x, self.density(i), i)
     }
 
     /// Continuous density on bin `i`.
     pub fn density(&self, i: usize) -> f32 {
-        (self.func[i] as f64 / self.integral) as f32
+        self.density[i]
     }
 }
 

@@ -90,9 +90,15 @@ pub fn latlong_dir_to_uv(d: Vec3) -> Vec2 {
 /// Lat-long: uv → unit direction (`param::Param::LatLong`'s mapping in f32; see
 /// [`latlong_dir_to_uv`]).
 pub fn latlong_uv_to_dir(uv: Vec2) -> Vec3 {
+    latlong_uv_to_dir_sin(uv).0
+}
+
+/// [`latlong_uv_to_dir`] and the sine of the polar angle, sin θ, which converts a density
+/// over uv into one over solid angle (the environment's importance sampling needs both).
+pub fn latlong_uv_to_dir_sin(uv: Vec2) -> (Vec3, f32) {
     let (sp, cp) = ((uv.x - 0.5) * std::f32::consts::TAU).sin_cos();
     let (st, ct) = (uv.y * std::f32::consts::PI).sin_cos();
-    Vec3::new(st * sp, ct, -st * cp)
+    (Vec3::new(st * sp, ct, -st * cp), st)
 }
 
 /// Visit every texel of an environment image with its direction and solid angle. Directions

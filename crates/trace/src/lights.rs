@@ -173,8 +173,7 @@ impl LightSet {
     pub fn sample_env(&self, env: &Environment, u: Vec2) -> Option<LightSample> {
         let d = self.env_dist.as_ref()?;
         let (uv, pdf_uv) = d.sample(u);
-        let wi = Environment::uv_to_dir(uv);
-        let sin = (uv.y * PI).sin();
+        let (wi, sin) = lightlab_core::sh_env::latlong_uv_to_dir_sin(uv);
         if sin <= 0.0 || pdf_uv <= 0.0 {
             return None;
         }
