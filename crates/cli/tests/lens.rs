@@ -62,7 +62,7 @@ fn the_gpu_thin_and_thick_lenses_match_the_traced_ones() {
         );
         // Each sample point is a full frame on lavapipe: 16 of them cost a quarter of the 64
         // this test used to take, and still measure well inside both bounds (see the closing
-        // figures in docs/lens-systems.md).
+        // figures in docs/lenses.md).
         assert!(e_lens <= 0.01, "{model}: relMSE {e_lens}");
         assert!(
             e_lens < e_pinhole / 4.0,
