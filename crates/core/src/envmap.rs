@@ -285,16 +285,27 @@ pub fn mip_sizes(size: u32) -> Vec<u32> {
 /// The texels' solid angles of every level of a face's mip chain but the last, one level
 /// after the other (row-major): the weights of [`mip_chain`]'s 2×2 steps, for a GPU port.
 pub fn mip_weights(param: Param, size: u32) -> Vec<f32> {
+    level_solid_angles(param, size)
+        .iter()
+        .flatten()
+        .map(|&w| w as f32)
+        .collect()
+}
+
+/// The texels' solid angles of every level of a face's mip chain but the last (row-major,
+/// one table per level). They are the same for every layer of a map, so [`prefilter`] computes
+/// them once: each rim texel of the disc maps costs a quadrature, and recomputing them per
+/// layer was a tenth of a `phong-shadow-maps` render of a small image on lavapipe.
+fn level_solid_angles(param: Param, size: u32) -> Vec<Vec<f64>> {
     let sizes = mip_sizes(size);
-    let mut w = vec![];
-    for &n in &sizes[..sizes.len() - 1] {
-        for y in 0..n {
-            for x in 0..n {
-                w.push(param.texel_solid_angle(x, y, n, n) as f32);
-            }
-        }
-    }
-    w
+    sizes[..sizes.len() - 1]
+        .iter()
+        .map(|&n| {
+            (0..n * n)
+                .map(|i| param.texel_solid_angle(i % n, i / n, n, n))
+                .collect()
+        })
+        .collect()
 }
 
 /// One face of one level at face size `n`.
@@ -345,12 +356,14 @@ fn upsample(data: &[Vec3], n: u32, m: u32) -> Vec<Vec3> {
 
 /// The minification chain of a face: 2×2 averages weighted by the texels' solid angles
 /// (§8.2.3); texels outside a disc weigh nothing unless all four are outside.
-fn mip_chain(param: Param, level0: Vec<Vec3>, size: u32) -> Vec<Vec<Vec3>> {
-    // Sizes halve as the GPU's do (⌊n/2⌋); an odd row or column is read twice.
+fn mip_chain(level0: Vec<Vec3>, size: u32, angles: &[Vec<f64>]) -> Vec<Vec<Vec3>> {
+    // Sizes halve as the GPU's do (⌊n/2⌋); an odd row or column is read twice. `angles` is
+    // `level_solid_angles` of the map's parameterisation and `size`.
     let mut mips = vec![level0];
     let mut n = size;
     while n > 1 {
         let prev = mips.last().unwrap();
+        let omega = &angles[mips.len() - 1];
         let m = n / 2;
         let mut out = Vec::with_capacity((m * m) as usize);
         for y in 0..m {
@@ -359,7 +372,7 @@ fn mip_chain(param: Param, level0: Vec<Vec3>, size: u32) -> Vec<Vec<Vec3>> {
                 for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                     let (cx, cy) = ((2 * x + dx).min(n - 1), (2 * y + dy).min(n - 1));
                     let v = prev[(cy * n + cx) as usize];
-                    let w = param.texel_solid_angle(cx, cy, n, n);
+                    let w = omega[(cy * n + cx) as usize];
                     s += v * w as f32;
                     ws += w;
                     plain += v * 0.25;
@@ -378,6 +391,7 @@ pub fn prefilter(img: &Image, scale: f32, settings: &EnvSettings) -> EnvMaps {
     let src = Source::new(img, scale);
     let faces = settings.param.faces();
     let size = settings.size.max(1);
+    let angles = level_solid_angles(settings.param, size);
     let mut layers = vec![];
     for &lobe in &settings.lobes {
         for &r in &settings.roughness {
@@ -388,7 +402,7 @@ pub fn prefilter(img: &Image, scale: f32, settings: &EnvSettings) -> EnvMaps {
             };
             for face in 0..faces {
                 let data = level_face(&src, &level, lobe, r, face, n);
-                layers.push(mip_chain(settings.param, upsample(&data, n, size), size));
+                layers.push(mip_chain(upsample(&data, n, size), size, &angles));
             }
         }
     }
@@ -408,7 +422,7 @@ pub fn prefilter(img: &Image, scale: f32, settings: &EnvSettings) -> EnvMaps {
                 face,
                 n,
             );
-            layers.push(mip_chain(settings.param, upsample(&data, n, size), size));
+            layers.push(mip_chain(upsample(&data, n, size), size, &angles));
         }
     }
     EnvMaps {

@@ -297,17 +297,25 @@ fn disc_area(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
     area
 }
 
+/// Gauss–Legendre nodes on [−1, 1] for [`disc_integral`]: 4 (`rim` false) or 24 (`rim` true),
+/// each computed once. A call runs Newton's method on every root, and a map's rim texels asked
+/// for them thousands of times per map.
+fn disc_nodes(rim: bool) -> &'static (Vec<f64>, Vec<f64>) {
+    static INSIDE: std::sync::OnceLock<(Vec<f64>, Vec<f64>)> = std::sync::OnceLock::new();
+    static RIM: std::sync::OnceLock<(Vec<f64>, Vec<f64>)> = std::sync::OnceLock::new();
+    if rim {
+        RIM.get_or_init(|| crate::quadrature::gauss_legendre(24))
+    } else {
+        INSIDE.get_or_init(|| crate::quadrature::gauss_legendre(4))
+    }
+}
+
 /// ∫∫ f over [x0,x1]×[y0,y1] ∩ unit disc: Gauss–Legendre over x pieces split where the
 /// boundary changes, and over each vertical chord.
 fn disc_integral(x0: f64, x1: f64, y0: f64, y1: f64, f: impl Fn(f64, f64) -> f64) -> f64 {
     // Texels inside the disc carry a smooth integrand: 4 nodes per axis are exact to ~1e-12 over
     // a texel; rim texels (a √-shaped chord) get 24.
-    let nodes = if corner_max_r2(x0, x1, y0, y1) <= 1.0 {
-        4
-    } else {
-        24
-    };
-    let (gx, gw) = crate::quadrature::gauss_legendre(nodes);
+    let (gx, gw) = disc_nodes(corner_max_r2(x0, x1, y0, y1) > 1.0);
     let b = x_breaks(x0.max(-1.0), x1.min(1.0), y0, y1);
     let mut total = 0.0;
     for w in b.windows(2) {
@@ -315,7 +323,7 @@ fn disc_integral(x0: f64, x1: f64, y0: f64, y1: f64, f: impl Fn(f64, f64) -> f64
         if c <= a {
             continue;
         }
-        for (xi, wi) in gx.iter().zip(&gw) {
+        for (xi, wi) in gx.iter().zip(gw) {
             let x = a + (c - a) * 0.5 * (xi + 1.0);
             let s = (1.0 - x * x).max(0.0).sqrt();
             let (lo, hi) = (y0.max(-s), y1.min(s));
@@ -323,7 +331,7 @@ fn disc_integral(x0: f64, x1: f64, y0: f64, y1: f64, f: impl Fn(f64, f64) -> f64
                 continue;
             }
             let mut inner = 0.0;
-            for (yj, wj) in gx.iter().zip(&gw) {
+            for (yj, wj) in gx.iter().zip(gw) {
                 let y = lo + (hi - lo) * 0.5 * (yj + 1.0);
                 inner += wj * f(x, y);
             }
