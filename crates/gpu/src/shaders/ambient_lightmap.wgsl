@@ -74,7 +74,7 @@ fn source_vertex(p: vec3<f32>, vi: u32, ii: u32) -> vec3<f32> {
 }
 
 // `nv`: the interpolated vertex normal (before the normal map), turned like s.n.
-fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
+fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>, glossy: vec3<f32>) -> vec3<f32> {
     let uv1 = in.uv1;
     var e = lightmap_read(uv1, 0u);
     if (lm_u.mode & 4u) != 0u {
@@ -83,5 +83,5 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
         let nl = vec3<f32>(dot(s.n, f[0]), dot(s.n, f[1]), dot(s.n, nv));
         e *= max(dot(directional_weights(nl), r), 0.0);
     }
-    return s.diffuse * max(e, vec3<f32>(0.0)) + emission(in);
+    return s.diffuse * max(e, vec3<f32>(0.0)) + glossy + emission(in);
 }

@@ -164,13 +164,13 @@ fn source_vertex(p: vec3<f32>, vi: u32, ii: u32) -> vec3<f32> {
 }
 
 // Only the volume's indirect light in the indirect-only view.
-fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
+fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>, glossy: vec3<f32>) -> vec3<f32> {
     if lpv_u.mode == 2u && lpv_u.sun_dir.w > 0.5 && lpv_u.indirect_only == 0u {
-        return wpi_composite(s) + emission(in);
+        return wpi_composite(s) + glossy + emission(in);
     }
     // The sky's visibility and the shares of the hemispheres the volume's light comes from
     // (the surfaces beyond the lookup's reach), in one pass.
-    let sky_t = sky_terms(s, lpv_u.occlusion_radius);
+    let sky_t = sky_terms(s, lpv_u.occlusion_radius, env_occlusion_lobe(s));
     var e = lpv_irradiance(s.p, s.n) * sky_t.far;
     if s.transmission > 0.0 {
         // Thin foliage (diffuse transmission t): 1 − t of the light arriving on the front is
@@ -181,5 +181,5 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     if lpv_u.indirect_only == 1u {
         return indirect;
     }
-    return indirect + sky_light(s, sky_t) + emission(in);
+    return indirect + sky_light(s, sky_t) + glossy * sky_t.spec + emission(in);
 }

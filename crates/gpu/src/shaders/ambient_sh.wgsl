@@ -123,6 +123,6 @@ fn source_vertex(p: vec3<f32>, vi: u32, ii: u32) -> vec3<f32> {
     return e;
 }
 
-fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
-    return s.diffuse * max(sh_ambient(in), vec3<f32>(0.0)) + emission(in);
+fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>, glossy: vec3<f32>) -> vec3<f32> {
+    return s.diffuse * max(sh_ambient(in), vec3<f32>(0.0)) + glossy + emission(in);
 }

@@ -218,12 +218,21 @@ fn env_lobe(base: u32, lobe_set: u32, roughness: f32, d: vec3<f32>, lod: f32) ->
 }
 
 // The environment reflected by the specular lobe of `s` towards v (unit, to the viewer): GGX
-// with the split-sum table, or Heidrich's Phong prefilter (f0·⟨n,r⟩·map). `dr` is the
-// reflected direction's change across a pixel (radians), which picks the minification level.
+// with the split-sum table, or Heidrich's Phong prefilter (f0·⟨n,r⟩·map) (`glossy`), and the
+// smooth dielectric interface (`glass`). `dr` is the reflected direction's change across a
+// pixel (radians), which picks the minification level. Kept apart because the ambient source
+// occludes the glossy term (`source_radiance`), not the glass's.
 // The uniform test stays apart from the per-fragment one: lavapipe (Debian 12, LLVM 15)
 // crashes compiling a branch whose condition mixes the two around these texture reads.
-fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) -> vec3<f32> {
-    var out = vec3<f32>(0.0);
+struct EnvSpecular {
+    glossy: vec3<f32>,
+    glass: vec3<f32>,
+}
+
+fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) -> EnvSpecular {
+    var out: EnvSpecular;
+    out.glossy = vec3<f32>(0.0);
+    out.glass = vec3<f32>(0.0);
     // The dynamic maps' layers for their instance (a layer offset: no branch on it), and the
     // reflected direction corrected for the map's parallax.
     let inst = env_instances[instance];
@@ -237,14 +246,44 @@ fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) 
     if env_u.specular != 0u {
         let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (nv > 0.0);
         if glossy {
-            out = env_glossy(s, nv, rd, dr, base) * (1.0 - s.delta);
+            out.glossy = env_glossy(s, nv, rd, dr, base) * (1.0 - s.delta);
         }
         let glass = (s.delta > 0.0) & (nv > 0.0);
         if glass {
-            out += env_glass(s, v, nv, rd, dr, base, instance) * s.delta;
+            out.glass = env_glass(s, v, nv, rd, dr, base, instance) * s.delta;
         }
     }
     return out;
+}
+
+// The glossy term's lobe as a function of the direction ω it reflects, for the sky's
+// specular occlusion (sky_occlusion.wgsl): (r, κ) for the weight exp(κ(⟨r,ω⟩ − 1)), r the
+// view reflected about n. A von Mises–Fisher fit: GGX's half-vector distribution falls as
+// exp(−θh²/α²) near its peak and the reflected direction turns by 2θh, so κ = 1/(2α²);
+// Heidrich's Phong lobe cosⁿ about r is exp(n(cos − 1)) to the same order, κ = n. κ = 0
+// where s has no glossy environment term (then every direction weighs the same).
+fn env_occlusion_lobe(s: Surface) -> vec4<f32> {
+    let v = safe_normalize(frame.camera_pos - s.p, s.n);
+    let alpha = max(s.roughness * s.roughness, 1e-3);
+    let k = select(phong_exponent(env_phong_roughness(s)), 0.5 / (alpha * alpha), env_reads_ggx(s));
+    let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (dot(s.n, v) > 0.0);
+    return vec4<f32>(reflect(-v, s.n), select(0.0, min(k, 1e4), glossy));
+}
+
+// Whether the glossy term of s reads the GGX maps: the microfacet models (pbr,
+// torrance-sparrow, cook-torrance, ward), or every model under `--env-prefilter ggx`.
+fn env_reads_ggx(s: Surface) -> bool {
+    return (env_u.prefilter == 2u) | ((env_u.prefilter == 0u) & ((s.model == 0u) | (s.model >= 4u)));
+}
+
+// The roughness the Phong maps are read at: Blinn-Phong as the Phong lobe of a quarter of its
+// exponent.
+fn env_phong_roughness(s: Surface) -> f32 {
+    if s.model == 3u {
+        let e = phong_exponent(s.roughness) / 4.0;
+        return pow(2.0 / (max(e, 1.0) + 2.0), 0.25);
+    }
+    return s.roughness;
 }
 
 // The smooth dielectric interface (Heidrich §8.3.1, §8.3.3 with one interface): Fresnel-
@@ -359,10 +398,8 @@ fn env_irradiance(n: vec3<f32>) -> vec3<f32> {
 
 fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32, base: u32) -> vec3<f32> {
     let lod = clamp(log2(max(dr, 1e-8) / max(env_u.texel_angle, 1e-8)), 0.0, max(env_u.mips - 1.0, 0.0));
-    // The microfacet models (pbr, torrance-sparrow, cook-torrance, ward) read the GGX maps.
-    let ggx = (env_u.prefilter == 2u) | ((env_u.prefilter == 0u) & ((s.model == 0u) | (s.model >= 4u)));
     var out = vec3<f32>(0.0);
-    if ggx {
+    if env_reads_ggx(s) {
         let l = env_lobe(base, env_u.ggx_set, s.roughness, r, lod);
         let ab = env_split_sum(nv, s.roughness);
         // The table integrates Schlick's Fresnel: a measured metal scales by the exact
@@ -371,13 +408,7 @@ fn env_glossy(s: Surface, nv: f32, r: vec3<f32>, dr: f32, base: u32) -> vec3<f32
         let ratio = surface_fresnel(s, nv) / max(schlick(nv, s.f0), vec3<f32>(1e-4));
         out = l * (s.f0 * ab.x + ab.y) * select(vec3<f32>(1.0), ratio, s.conductor != 0u);
     } else {
-        var roughness = s.roughness;
-        if s.model == 3u {
-            // Blinn-Phong: the Phong lobe of a quarter of its exponent.
-            let e = phong_exponent(s.roughness) / 4.0;
-            roughness = pow(2.0 / (max(e, 1.0) + 2.0), 0.25);
-        }
-        let l = env_lobe(base, env_u.phong_set, roughness, r, lod);
+        let l = env_lobe(base, env_u.phong_set, env_phong_roughness(s), r, lod);
         out = s.f0 * l * max(dot(s.n, r), 0.0);
     }
     return out;

@@ -250,18 +250,21 @@ fn emission(in: VertexOut) -> vec3<f32> {
 }
 
 // The radiance a fragment gets besides the per-light passes: the ambient source's term and
-// emission (`source_radiance`, defined by the ambient source compiled after this file), and the
-// specular environment term (env.wgsl), or a planar mirror's reflected view.
+// emission with the specular environment term's glossy part (`source_radiance`, defined by the
+// ambient source compiled after this file, which may occlude it), and the environment's glass
+// term (env.wgsl), or a planar mirror's reflected view instead of both.
 fn base_radiance(s: Surface, in: VertexOut, nv: vec3<f32>) -> vec3<f32> {
     let v = safe_normalize(frame.camera_pos - s.p, s.n);
     let r = reflect(-v, s.n);
     let dr = max(length(dpdx(r)), length(dpdy(r)));
     // A planar mirror shows its reflected view instead of the environment map (`select`: the
     // lookups stay out of a branch on per-fragment data, see env.wgsl on lavapipe).
-    let mirror = env_instances[in.instance].dynamic.w;
+    let layer = env_instances[in.instance].dynamic.w;
+    let mirror = layer != 0u;
     let spec = env_specular(s, v, r, dr, in.instance);
-    let planar = env_planar_mirror(s, dot(s.n, v), in.clip.xy, mirror);
-    let own = source_radiance(s, in, nv) + select(spec, planar, mirror != 0u);
+    let planar = env_planar_mirror(s, dot(s.n, v), in.clip.xy, layer);
+    let glossy = select(spec.glossy, vec3<f32>(0.0), mirror);
+    let own = source_radiance(s, in, nv, glossy) + select(spec.glass, planar, mirror);
     // A radiance field's object: everything but the scene's punctual lights from the field.
     let field = env_field_lookup(frame.camera_pos, -v);
     return select(own, field.rgb, env_radiance_field(in.instance));

@@ -44,14 +44,16 @@ fn receiver_shift(cg: f32, texel: f32) -> vec2<f32> {
 }
 
 // What sky_terms finds at a point: the fraction of the sky's irradiance that reaches it around
-// n (front) and, on thin translucent surfaces, around −n (back; 1 elsewhere), per channel; and
-// the shares of the hemispheres around n and −n from which the light volume's light can arrive
-// (far, far_back).
+// n (front) and, on thin translucent surfaces, around −n (back; 1 elsewhere), per channel; the
+// shares of the hemispheres around n and −n from which the light volume's light can arrive
+// (far, far_back); and the fraction of the sky's light in the glossy lobe that reaches it
+// (spec).
 struct SkyTerms {
     front: vec3<f32>,
     back: vec3<f32>,
     far: f32,
     far_back: f32,
+    spec: vec3<f32>,
 }
 
 // seen / lit per channel; 1 where nothing lit.
@@ -81,7 +83,15 @@ fn lit_share(seen: vec3<f32>, lit: vec3<f32>) -> vec3<f32> {
 // it). The volume's blurred 2-band light stands for the rest; 1 without directions.
 // far_back: the same around −n on thin translucent surfaces (the light arriving on their back
 // passes through); far elsewhere.
-fn sky_terms(s: Surface, radius: f32) -> SkyTerms {
+//
+// spec: as front, each direction also weighted by the glossy lobe, exp(κ(⟨r,ω_k⟩ − 1)) with
+// `lobe` = (r, κ) (env.wgsl `env_occlusion_lobe`): Σ V_k E_k(n) g_k / Σ E_k(n) g_k. The sky's
+// reflection in a glossy surface is occluded by what hides the sky in the lobe's directions,
+// not by what hides it around n: unoccluded (before), the shaded inside of the bush's canopy
+// reflected the open sky, and its direct light's error against the path tracer was twice what
+// it is with this. The weights are kept relative to the largest so far (a sharp lobe would
+// underflow far from its nearest direction): one exponential per direction.
+fn sky_terms(s: Surface, radius: f32, lobe: vec4<f32>) -> SkyTerms {
     let count = u32(sky.x);
     let texel = sky.y;
     let range = 3.0 * sky.z;
@@ -93,6 +103,9 @@ fn sky_terms(s: Surface, radius: f32) -> SkyTerms {
     // The hemispheres' weights and their far shares: front in x, back in y.
     var area = vec2<f32>(0.0);
     var far = vec2<f32>(0.0);
+    var lit_spec = vec3<f32>(0.0);
+    var seen_spec = vec3<f32>(0.0);
+    var peak = -3.0e38;
     for (var k = 0u; k < count; k++) {
         let d = sky_dirs[k];
         let dir = -d.rows[2].xyz * range;
@@ -116,6 +129,15 @@ fn sky_terms(s: Surface, radius: f32) -> SkyTerms {
         if front {
             lit += wl;
             seen += wl * v;
+            // The lobe's weight over the largest before (x < 1), or this one the largest
+            // (the sums scaled down by x): selects, no branch.
+            let e = lobe.w * (dot(lobe.xyz, dir) - 1.0);
+            let x = exp(-abs(e - peak));
+            let top = e > peak;
+            let g = wl * select(x, 1.0, top);
+            lit_spec = select(lit_spec, lit_spec * x, top) + g;
+            seen_spec = select(seen_spec, seen_spec * x, top) + g * v;
+            peak = max(peak, e);
         } else {
             lit_back += wl;
             seen_back += wl * v;
@@ -134,6 +156,7 @@ fn sky_terms(s: Surface, radius: f32) -> SkyTerms {
     var t: SkyTerms;
     t.front = lit_share(seen, lit);
     t.back = lit_share(seen_back, lit_back);
+    t.spec = lit_share(seen_spec, lit_spec);
     let share = select(vec2<f32>(1.0), far / max(area, vec2<f32>(1e-8)), area > vec2<f32>(0.0));
     t.far = share.x;
     t.far_back = select(share.x, share.y, two_sided);
@@ -142,7 +165,7 @@ fn sky_terms(s: Surface, radius: f32) -> SkyTerms {
 
 // The fraction of the sky's irradiance at n that reaches p, per channel (`sky_terms`' front).
 fn sky_visibility(s: Surface) -> vec3<f32> {
-    return sky_terms(s, 0.0).front;
+    return sky_terms(s, 0.0, vec4<f32>(0.0)).front;
 }
 
 // The sky's diffuse light leaving s towards the viewer, occluded by `t`: the light arriving
