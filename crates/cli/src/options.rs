@@ -509,9 +509,9 @@ pub struct RasterArgs {
     /// of the Phong and LPV techniques (specular reflections keep it in the environment map).
     #[arg(long, default_value = "on", value_parser = ["on", "off"])]
     pub env_sun: String,
-    /// Sky directions whose shadow maps occlude the Phong and LPV techniques' sky light, its
-    /// diffuse light and its glossy reflection (the scene seen from each, up to 256; 0: the sky
-    /// light is unshadowed).
+    /// Sky directions whose shadow maps occlude the Phong and LPV techniques' diffuse sky light,
+    /// and the LPV techniques' glossy reflection of the sky (the scene seen from each, up to 256;
+    /// 0: the sky light is unshadowed).
     #[arg(long, default_value_t = lightlab_gpu::raster::SKY_OCCLUSION_DIRECTIONS)]
     pub sky_occlusion: u32,
     /// How glass (KHR_materials_transmission) refracts the environment: one interface, or two

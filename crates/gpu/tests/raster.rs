@@ -658,7 +658,7 @@ fn the_occluded_sky_matches_the_path_tracer_in_a_closed_room() {
     };
     let mut scene = builtin::builtin("room").unwrap();
     scene.lights.clear();
-    let (occluded, open, ratio) = sky_in_a_closed_room(&ctx, &scene);
+    let (occluded, open, ratio) = sky_in_a_closed_room(&ctx, &scene, false);
     eprintln!(
         "sky in a closed room: relMSE occluded {occluded:.4}, unoccluded {open:.4}; mean \
          occluded / traced {ratio:.4}"
@@ -671,9 +671,10 @@ fn the_occluded_sky_matches_the_path_tracer_in_a_closed_room() {
     );
 }
 
-/// The same room with every surface a rough metal: the sky reaches the inside only as its
-/// glossy reflection, which the occluded sky weights by the reflected lobe (sky_occlusion.wgsl
-/// `spec`). Unoccluded, the floor and walls mirror the open sky through the roof.
+/// The same room with every surface a rough metal, under `lpv`: the sky reaches the inside only
+/// as its glossy reflection, which the volume's source occludes by the sky's directions in the
+/// reflected lobe (sky_occlusion.wgsl `spec`; the volume is empty, metals inject nothing).
+/// Unoccluded, the floor and walls mirror the open sky through the roof.
 #[test]
 fn the_occluded_sky_hides_the_sky_from_glossy_surfaces_in_a_closed_room() {
     let Some(ctx) = test_context() else {
@@ -687,7 +688,7 @@ fn the_occluded_sky_hides_the_sky_from_glossy_surfaces_in_a_closed_room() {
         m.base_color = glam::Vec4::new(0.8, 0.8, 0.8, 1.0);
         m.base_color_texture = None;
     }
-    let (occluded, open, ratio) = sky_in_a_closed_room(&ctx, &scene);
+    let (occluded, open, ratio) = sky_in_a_closed_room(&ctx, &scene, true);
     eprintln!(
         "glossy room: relMSE occluded {occluded:.4}, unoccluded {open:.4}; mean occluded / \
          traced {ratio:.4}"
@@ -703,24 +704,26 @@ fn the_occluded_sky_hides_the_sky_from_glossy_surfaces_in_a_closed_room() {
     assert!((ratio - 1.0).abs() < 0.15, "mean ratio {ratio}");
 }
 
-/// relMSE of the room's shadow-mapped, sky-occluded render against the path tracer's direct
-/// light, the same without occlusion, and the occluded render's mean over the traced one.
-fn sky_in_a_closed_room(ctx: &GpuContext, scene: &Scene) -> (f64, f64, f64) {
+/// relMSE of the room's shadow-mapped, sky-occluded render (the `sky` source, or the volume's
+/// with `lpv`) against the path tracer's direct light, the same without occlusion, and the
+/// occluded render's mean over the traced one.
+fn sky_in_a_closed_room(ctx: &GpuContext, scene: &Scene, lpv: bool) -> (f64, f64, f64) {
     let (w, h, ssaa) = (96, 72, 2);
     let reference = traced_direct(scene, w, h, 64, 5);
     let gpu = |sky_occlusion: u32| {
-        let mut r = Renderer::new(
-            ctx,
-            scene,
-            RasterSettings {
-                width: w * ssaa,
-                height: h * ssaa,
-                shadows: ShadowMethod::Map,
-                ambient: Ambient::Environment,
-                sky_occlusion,
-                ..Default::default()
-            },
-        )
+        let settings = RasterSettings {
+            width: w * ssaa,
+            height: h * ssaa,
+            shadows: ShadowMethod::Map,
+            ambient: Ambient::Environment,
+            sky_occlusion,
+            ..Default::default()
+        };
+        let mut r = if lpv {
+            Renderer::with_lpv(ctx, scene, settings, &Default::default(), false)
+        } else {
+            Renderer::new(ctx, scene, settings)
+        }
         .unwrap();
         r.render(ctx);
         r.read_hdr(ctx).unwrap().downsample(ssaa)
@@ -810,7 +813,8 @@ fn the_occluded_sky_keeps_the_colour_of_what_it_sees() {
 /// No acne from the shadow-mapped sky: a convex object under a uniform sky sees all of the
 /// sky above every point of it, so the occluded sky must light it as the unoccluded one does
 /// (a sphere for curved surfaces at every angle to the directions, a tilted box for flat ones),
-/// in its diffuse light and in its glossy reflection (a rough metal).
+/// in its diffuse light and, under `lpv` (whose source occludes it), in its glossy reflection
+/// (a rough metal).
 #[test]
 fn the_occluded_sky_leaves_convex_objects_unshadowed() {
     let Some(ctx) = test_context() else {
@@ -849,18 +853,19 @@ fn the_occluded_sky_leaves_convex_objects_unshadowed() {
             0.8,
         ));
         let render = |sky_occlusion: u32| {
-            let mut r = Renderer::new(
-                &ctx,
-                &scene,
-                RasterSettings {
-                    width: 96,
-                    height: 96,
-                    shadows: ShadowMethod::Map,
-                    ambient: Ambient::Constant(Vec3::ONE),
-                    sky_occlusion,
-                    ..Default::default()
-                },
-            )
+            let settings = RasterSettings {
+                width: 96,
+                height: 96,
+                shadows: ShadowMethod::Map,
+                ambient: Ambient::Constant(Vec3::ONE),
+                sky_occlusion,
+                ..Default::default()
+            };
+            let mut r = if material.metallic > 0.0 {
+                Renderer::with_lpv(&ctx, &scene, settings, &Default::default(), false)
+            } else {
+                Renderer::new(&ctx, &scene, settings)
+            }
             .unwrap();
             r.render(&ctx);
             r.read_hdr(&ctx).unwrap()

@@ -64,25 +64,40 @@ fn lpv_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
         let y = vec4<f32>(0.2820948, 0.4886025 * m.y, 0.4886025 * m.z, 0.4886025 * m.x);
         return max(vec3<f32>(dot(v.r, y), dot(v.g, y), dot(v.b, y)), vec3<f32>(0.0));
     }
+    let cw = lpv_cascade_of(p);
+    let c = u32(cw.x);
+    let e = lpv_cascade_irradiance(p, n, c);
+    if cw.y < 1.0 {
+        return cw.y * e + (1.0 - cw.y) * lpv_cascade_irradiance(p, n, c + 1u);
+    }
+    return e;
+}
+
+// The finest cascade holding p (2 + damping) cells inside (x) and its weight against the next
+// coarser (y).
+fn lpv_cascade_of(p: vec3<f32>) -> vec2<f32> {
     let last = lpv_u.cascades - 1u;
     let border = 2.0 + lpv_u.damping;
-    var c = last;
-    var w = 1.0;
     for (var k = 0u; k < last; k++) {
         let g = lpv_u.grids[k];
         let f = (p - g.xyz) / g.w;
         let d = min(min(f.x, min(f.y, f.z)), lpv_u.size - max(f.x, max(f.y, f.z)));
         if d > border {
-            c = k;
-            w = min((d - border) / 2.0, 1.0);
-            break;
+            return vec2<f32>(f32(k), min((d - border) / 2.0, 1.0));
         }
     }
-    let e = lpv_cascade_irradiance(p, n, c);
-    if w < 1.0 {
-        return w * e + (1.0 - w) * lpv_cascade_irradiance(p, n, c + 1u);
-    }
-    return e;
+    return vec2<f32>(f32(last), 1.0);
+}
+
+// The volume's light where its lookup reads for a surface at p facing n, as radiance (the
+// intensity SH over the cell's face area): what weights the near-occlusion shares and lights
+// the glossy lobe's occluded directions (sky_terms).
+fn lpv_surroundings(p: vec3<f32>, n: vec3<f32>) -> Surroundings {
+    let c = u32(lpv_cascade_of(p).x);
+    let s = lpv_u.grids[c].w;
+    let v = lpv_sample(p + 0.5 * s * n, c);
+    let k = 1.0 / (s * s);
+    return Surroundings(v.r * k, v.g * k, v.b * k);
 }
 
 // ---- lpv-faithful's composite (the WPI report's App. B, defCompositor) ----------------------
@@ -170,7 +185,7 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>, glossy: vec3<f32>) 
     }
     // The sky's visibility and the shares of the hemispheres the volume's light comes from
     // (the surfaces beyond the lookup's reach), in one pass.
-    let sky_t = sky_terms(s, lpv_u.occlusion_radius, env_occlusion_lobe(s));
+    let sky_t = sky_terms(s, lpv_u.occlusion_radius, env_occlusion_lobe(s), lpv_surroundings(s.p, s.n));
     var e = lpv_irradiance(s.p, s.n) * sky_t.far;
     if s.transmission > 0.0 {
         // Thin foliage (diffuse transmission t): 1 − t of the light arriving on the front is

@@ -43,6 +43,21 @@ fn receiver_shift(cg: f32, texel: f32) -> vec2<f32> {
     return texel * vec2<f32>(clamp((sn - c) * ic * ic, 0.0, 2.0), min(sn * ic, 1.0) + 0.1);
 }
 
+// The light arriving at a point from its surroundings, as 2-band SH of radiance per colour
+// channel (towards the direction the light travels): the light volume's, which weights the
+// far shares and lights the glossy lobe's occluded directions; zero where there is none.
+struct Surroundings {
+    r: vec4<f32>,
+    g: vec4<f32>,
+    b: vec4<f32>,
+}
+
+// The radiance arriving from direction w (unit, towards where it comes from).
+fn surroundings_from(a: Surroundings, w: vec3<f32>) -> vec3<f32> {
+    let y = vec4<f32>(0.2820948, -0.4886025 * w.y, -0.4886025 * w.z, -0.4886025 * w.x);
+    return max(vec3<f32>(dot(a.r, y), dot(a.g, y), dot(a.b, y)), vec3<f32>(0.0));
+}
+
 // What sky_terms finds at a point: the fraction of the sky's irradiance that reaches it around
 // n (front) and, on thin translucent surfaces, around −n (back; 1 elsewhere), per channel; the
 // shares of the hemispheres around n and −n from which the light volume's light can arrive
@@ -84,14 +99,18 @@ fn lit_share(seen: vec3<f32>, lit: vec3<f32>) -> vec3<f32> {
 // far_back: the same around −n on thin translucent surfaces (the light arriving on their back
 // passes through); far elsewhere.
 //
-// spec: as front, each direction also weighted by the glossy lobe, exp(κ(⟨r,ω_k⟩ − 1)) with
-// `lobe` = (r, κ) (env.wgsl `env_occlusion_lobe`): Σ V_k E_k(n) g_k / Σ E_k(n) g_k. The sky's
-// reflection in a glossy surface is occluded by what hides the sky in the lobe's directions,
-// not by what hides it around n: unoccluded (before), the shaded inside of the bush's canopy
-// reflected the open sky, and its direct light's error against the path tracer was twice what
-// it is with this. The weights are kept relative to the largest so far (a sharp lobe would
-// underflow far from its nearest direction): one exponential per direction.
-fn sky_terms(s: Surface, radius: f32, lobe: vec4<f32>) -> SkyTerms {
+// spec: the glossy lobe's light over the open sky's, each direction weighted by the lobe,
+// g_k = exp(κ(⟨r,ω_k⟩ − 1)) with `lobe` = (r, κ) (env.wgsl `env_occlusion_lobe`):
+// Σ g_k (V_k E_k(n) + (1 − V_k) L_k(ω_k) ΔΩ_k ⟨n,ω_k⟩) / Σ g_k E_k(n), where a direction the
+// scene hides reflects what `around` sends from it (L_k) instead of the sky. Unoccluded, the
+// shaded inside of the bush's canopy reflected the open sky; unlit (L = 0), a chrome ball
+// reflected a black ground. κ is capped at N/8 for N directions (below). The weights are kept
+// relative to the largest so far (a sharp lobe would underflow far from its nearest
+// direction): one exponential per direction.
+//
+// The far shares weight each direction also by the luminance of `around`'s light from it: where
+// the far directions are the bright ones, the volume's light is kept in proportion.
+fn sky_terms(s: Surface, radius: f32, lobe: vec4<f32>, around: Surroundings) -> SkyTerms {
     let count = u32(sky.x);
     let texel = sky.y;
     let range = 3.0 * sky.z;
@@ -106,6 +125,10 @@ fn sky_terms(s: Surface, radius: f32, lobe: vec4<f32>) -> SkyTerms {
     var lit_spec = vec3<f32>(0.0);
     var seen_spec = vec3<f32>(0.0);
     var peak = -3.0e38;
+    // No sharper than the directions resolve: a lobe of angular spread 1/√κ about their
+    // spacing, √(4π/N), so that a mirror's reflection blends its nearest directions instead
+    // of breaking into the patches each one sees.
+    let kappa = min(lobe.w, f32(count) / 8.0);
     for (var k = 0u; k < count; k++) {
         let d = sky_dirs[k];
         let dir = -d.rows[2].xyz * range;
@@ -131,12 +154,13 @@ fn sky_terms(s: Surface, radius: f32, lobe: vec4<f32>) -> SkyTerms {
             seen += wl * v;
             // The lobe's weight over the largest before (x < 1), or this one the largest
             // (the sums scaled down by x): selects, no branch.
-            let e = lobe.w * (dot(lobe.xyz, dir) - 1.0);
+            let e = kappa * (dot(lobe.xyz, dir) - 1.0);
             let x = exp(-abs(e - peak));
             let top = e > peak;
             let g = wl * select(x, 1.0, top);
             lit_spec = select(lit_spec, lit_spec * x, top) + g;
-            seen_spec = select(seen_spec, seen_spec * x, top) + g * v;
+            let fill = surroundings_from(around, dir) * (d.cell.w * c);
+            seen_spec = select(seen_spec, seen_spec * x, top) + select(x, 1.0, top) * (wl * v + fill * (1.0 - v));
             peak = max(peak, e);
         } else {
             lit_back += wl;
@@ -148,7 +172,8 @@ fn sky_terms(s: Surface, radius: f32, lobe: vec4<f32>) -> SkyTerms {
             // every backend).
             let within = textureSampleCompareLevel(sky_depth, sky_cmp, uv, i32(k), clip.z - radius / range);
             let side = select(vec2<f32>(0.0, 1.0), vec2<f32>(1.0, 0.0), front);
-            let wo = d.cell.w * abs(c);
+            let lk = dot(surroundings_from(around, dir), vec3<f32>(0.2126, 0.7152, 0.0722));
+            let wo = d.cell.w * abs(c) * lk;
             area += side * wo;
             far += side * (wo * (1.0 - within));
         }
@@ -165,7 +190,8 @@ fn sky_terms(s: Surface, radius: f32, lobe: vec4<f32>) -> SkyTerms {
 
 // The fraction of the sky's irradiance at n that reaches p, per channel (`sky_terms`' front).
 fn sky_visibility(s: Surface) -> vec3<f32> {
-    return sky_terms(s, 0.0, vec4<f32>(0.0)).front;
+    let none = vec4<f32>(0.0);
+    return sky_terms(s, 0.0, none, Surroundings(none, none, none)).front;
 }
 
 // The sky's diffuse light leaving s towards the viewer, occluded by `t`: the light arriving
