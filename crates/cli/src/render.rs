@@ -39,7 +39,9 @@ pub struct RenderArgs {
     /// The sky's diffuse light: traced (reference, direct); SH irradiance occluded through
     /// shadow-mapped sky directions (the Phong and LPV techniques, `--sky-occlusion`), and
     /// its bounce injected into `lpv`'s volume (`--lpv-sky-lights`); baked (lightmap,
-    /// lightmap+phong); in the SH transfer (prt-*, shl*).
+    /// lightmap+phong); in the SH transfer (prt-*, shl*). The sky's glossy reflection is
+    /// occluded in `lpv` only (by the sky directions in the lobe, the volume's light where
+    /// they are hidden).
     #[arg(long, default_value = "reference")]
     pub technique: Technique,
     #[arg(long, default_value_t = 256)]

@@ -54,7 +54,8 @@ impl Family {
         match self {
             Family::PathTraced => "traced: every sky ray is occluded exactly".into(),
             Family::Phong => format!(
-                "SH irradiance occluded through {} shadow-mapped sky directions (--sky-occlusion)",
+                "SH irradiance occluded through {} shadow-mapped sky directions (--sky-occlusion); \
+                 its glossy reflection unoccluded",
                 lightlab_gpu::raster::SKY_OCCLUSION_DIRECTIONS
             ),
             Family::Lightmap => "baked into the light-map, occluded and bounced by the bake".into(),
@@ -63,7 +64,8 @@ impl Family {
                 "SH irradiance occluded as the Phong techniques'; the volume adds the bounces of \
                  the lights and of the sky (lpv: 16 directional views, --lpv-sky-lights; \
                  multiple bounces, --lpv-bounces), from the directions whose first surface lies \
-                 beyond its cells (lpv: --no-lpv-near-occlusion)"
+                 beyond its cells (lpv: --no-lpv-near-occlusion); lpv's glossy reflection \
+                 occluded by the directions in its lobe, the volume's light where they are hidden"
                     .into()
             }
             Family::Debug => "none".into(),
