@@ -619,17 +619,7 @@ fn lpv_faithful_composites_as_the_report() {
     scene.add_mesh(quad("ground", c, m), glam::Mat4::IDENTITY);
     let slab = (Vec3::new(-0.5, 0.35, -0.5), Vec3::new(0.5, 0.4, 0.5));
     scene.add_mesh(aabb_box("slab", slab.0, slab.1, m), glam::Mat4::IDENTITY);
-    scene.lights.push(lightlab_scene::Light {
-        name: "sun".into(),
-        kind: lightlab_scene::LightKind::Directional {
-            angular_diameter: 0.0,
-        },
-        color: Vec3::ONE,
-        intensity: irradiance,
-        position: Vec3::ZERO,
-        direction: -Vec3::Y,
-        range: None,
-    });
+    scene.lights.push(point_sun(-Vec3::Y, irradiance));
     // Camera 0 looks at the shadow's centre from low on the side (under the slab); camera 1
     // straight down at the open plane.
     scene.cameras.push(lightlab_scene::Camera::look_at(
@@ -952,17 +942,9 @@ fn a_glossy_ball_reflects_the_lit_ground_its_sky_maps_hide() {
         sphere("ball", 0.5, 48, 24, chrome),
         glam::Mat4::from_translation(centre),
     );
-    scene.lights.push(lightlab_scene::Light {
-        name: "sun".into(),
-        kind: lightlab_scene::LightKind::Directional {
-            angular_diameter: 0.0,
-        },
-        color: Vec3::ONE,
-        intensity: 3.0,
-        position: Vec3::ZERO,
-        direction: Vec3::new(-0.4, -1.0, -0.3).normalize(),
-        range: None,
-    });
+    scene
+        .lights
+        .push(point_sun(Vec3::new(-0.4, -1.0, -0.3), 3.0));
     scene.environment = Some(lightlab_scene::Environment {
         image: Image::from_fn(16, 8, |_, y| {
             if y < 4 {
@@ -1034,4 +1016,20 @@ fn a_glossy_ball_reflects_the_lit_ground_its_sky_maps_hide() {
     eprintln!("chrome ball's lower half: {count} pixels, GPU / traced {ratio:.3}");
     assert!(count > 100, "{count} pixels");
     assert!((ratio - 1.0).abs() < 0.35, "GPU / traced {ratio}");
+}
+
+/// A white sun of no angular size travelling along `direction` with `irradiance` on a surface
+/// facing it.
+fn point_sun(direction: Vec3, irradiance: f32) -> lightlab_scene::Light {
+    lightlab_scene::Light {
+        name: "sun".into(),
+        kind: lightlab_scene::LightKind::Directional {
+            angular_diameter: 0.0,
+        },
+        color: Vec3::ONE,
+        intensity: irradiance,
+        position: Vec3::ZERO,
+        direction: direction.normalize(),
+        range: None,
+    }
 }
