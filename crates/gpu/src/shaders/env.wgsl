@@ -244,8 +244,7 @@ fn env_specular(s: Surface, v: vec3<f32>, r: vec3<f32>, dr: f32, instance: u32) 
     }
     let nv = dot(s.n, v);
     if env_u.specular != 0u {
-        let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (nv > 0.0);
-        if glossy {
+        if env_has_glossy(s, nv) {
             out.glossy = env_glossy(s, nv, rd, dr, base) * (1.0 - s.delta);
         }
         let glass = (s.delta > 0.0) & (nv > 0.0);
@@ -266,8 +265,13 @@ fn env_occlusion_lobe(s: Surface) -> vec4<f32> {
     let v = safe_normalize(frame.camera_pos - s.p, s.n);
     let alpha = max(s.roughness * s.roughness, 1e-3);
     let k = select(phong_exponent(env_phong_roughness(s)), 0.5 / (alpha * alpha), env_reads_ggx(s));
-    let glossy = (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (dot(s.n, v) > 0.0);
-    return vec4<f32>(reflect(-v, s.n), select(0.0, min(k, 1e4), glossy));
+    return vec4<f32>(reflect(-v, s.n), select(0.0, min(k, 1e4), env_has_glossy(s, dot(s.n, v))));
+}
+
+// Whether s has a glossy environment term seen at ⟨n,v⟩ = nv (not Lambert, some F0, facing
+// the viewer).
+fn env_has_glossy(s: Surface, nv: f32) -> bool {
+    return (s.model != 1u) & any(s.f0 > vec3<f32>(0.0)) & (nv > 0.0);
 }
 
 // Whether the glossy term of s reads the GGX maps: the microfacet models (pbr,
