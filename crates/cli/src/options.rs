@@ -1263,6 +1263,12 @@ pub struct LpvArgs {
     /// have none).
     #[arg(long)]
     pub no_lpv_near_occlusion: bool,
+    /// `lpv`: RSM texels per pixel for the near field, the light of the surfaces within the
+    /// lookup's reach (which near occlusion takes out of the volume's light), gathered from
+    /// the sun's reflective shadow map and occluded through the geometry volume, on opaque
+    /// surfaces; 0 = none (at most 256).
+    #[arg(long, default_value_t = lightlab_gpu::lpv::DEFAULT_NEAR_FIELD)]
+    pub lpv_near_field: u32,
     /// `lpv`: the sky's diffuse light enters the volume as this many directional RSM views
     /// (the environment split into cells around evenly spread directions), so that its bounce
     /// is shadowed like the sun's; 0 injects no sky light (at most 24 views in all).
@@ -1287,6 +1293,7 @@ impl Default for LpvArgs {
             lpv_reemit_lobe: lightlab_core::lpv::DEFAULT_REEMIT_LOBE,
             lpv_bounces: Bounces::Multiple,
             no_lpv_near_occlusion: false,
+            lpv_near_field: lightlab_gpu::lpv::DEFAULT_NEAR_FIELD,
             lpv_sky_lights: lightlab_gpu::lpv::DEFAULT_SKY_LIGHTS,
             debug_view: DebugView::Final,
         }
@@ -1319,6 +1326,7 @@ impl LpvArgs {
             reemit_lobe: self.lpv_reemit_lobe,
             bounces: self.lpv_bounces,
             near_occlusion: !self.no_lpv_near_occlusion,
+            near_field: if faithful { 0 } else { self.lpv_near_field },
             // The report lights its volume with the sun only (its sky is a composite term).
             sky_lights: if faithful { 0 } else { self.lpv_sky_lights },
             ..Default::default()

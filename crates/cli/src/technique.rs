@@ -64,8 +64,10 @@ impl Family {
                 "SH irradiance occluded as the Phong techniques'; the volume adds the bounces of \
                  the lights and of the sky (lpv: 16 directional views, --lpv-sky-lights; \
                  multiple bounces, --lpv-bounces), from the directions whose first surface lies \
-                 beyond its cells (lpv: --no-lpv-near-occlusion); lpv's glossy reflection \
-                 occluded by the directions in its lobe, the volume's light where they are hidden"
+                 beyond its cells (lpv: --no-lpv-near-occlusion), the nearer ones' light \
+                 gathered from the sun's RSM on opaque surfaces (lpv: --lpv-near-field); lpv's \
+                 glossy reflection occluded by the directions in its lobe, the volume's light \
+                 where they are hidden"
                     .into()
             }
             Family::Debug => "none".into(),

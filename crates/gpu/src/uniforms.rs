@@ -81,7 +81,8 @@ pub struct LpvAmbientUniforms {
     /// Sub-cell occlusion of the volume's light: the radius [m] within which the sky's depth
     /// maps count a surface as occluding (0: off).
     pub occlusion_radius: f32,
-    pub pad1: u32,
+    /// The near field gathered from the last light's RSM: samples per pixel (0: off).
+    pub near_samples: u32,
     pub pad2: u32,
     pub grids: [[f32; 4]; 4],
     /// `lpv-faithful`'s composite (the WPI report's App. B): the sun's direction of travel
@@ -90,8 +91,11 @@ pub struct LpvAmbientUniforms {
     /// The sun's irradiance on a surface facing it (rgb); w: the shadow bias in the RSM's
     /// depth units.
     pub sun_e: [f32; 4],
-    /// The sun's RSM view-projection (orthographic, depth 0..1).
+    /// The view-projection of the RSM the composite's sun or the near field reads (the last
+    /// light's; orthographic, depth 0..1).
     pub rsm_view_proj: [[f32; 4]; 4],
+    /// The near field's light: its direction of travel; w: the RSM's texel side [m].
+    pub near: [f32; 4],
 }
 
 /// One light (WGSL `GpuLight`). `kind`: 0 point, 1 spot, 2 directional, 3 area (an emissive
@@ -251,12 +255,13 @@ mod tests {
                     damping,
                     cascades,
                     occlusion_radius,
-                    pad1,
+                    near_samples,
                     pad2,
                     grids,
                     sun_dir,
                     sun_e,
-                    rsm_view_proj
+                    rsm_view_proj,
+                    near
                 ),
             ),
             (

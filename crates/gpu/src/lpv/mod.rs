@@ -103,6 +103,12 @@ pub struct LpvSettings {
     /// maps (Kaplanyan only; needs an environment, so none on cornell). See
     /// [`Lpv::near_occlusion_radius`].
     pub near_occlusion: bool,
+    /// The near field: the light of the surfaces within the lookup's reach, which near
+    /// occlusion takes out of the volume's light, gathered from the last light's RSM when it
+    /// is directional (the sun) with this many texels per pixel, occluded through the geometry
+    /// volume; on opaque surfaces only (Dachsbacher & Stamminger 2005's RSM gathering). 0 =
+    /// none; needs `near_occlusion`.
+    pub near_field: u32,
     /// The sky's light injected as this many directional RSM views (the environment split into
     /// cells, `raster::ambient::sky::sky_lights`), so that the volume carries the bounce of sky
     /// light, occluded as the sun's is; 0 = none (the sky then lights only directly).
@@ -115,6 +121,10 @@ pub struct LpvSettings {
 /// `reference`, ratio to the CPU's direct light; docs/lpv.md): room 0.45×, cornell 0.27×,
 /// atrium 0.33× at 16³ × 48 steps, against 0.71×, 0.55×, 0.39× at 32³ × 32 steps.
 pub const DEFAULT_GRID: u32 = 16;
+/// The near field's RSM texels per pixel by default ([`LpvSettings::near_field`]).
+pub const DEFAULT_NEAR_FIELD: u32 = 32;
+/// The most near-field texels per pixel.
+pub const MAX_NEAR_FIELD: u32 = 256;
 /// `lpv-faithful`'s grid (the WPI report's 32³).
 pub const FAITHFUL_GRID: u32 = 32;
 /// `lpv`'s propagation steps per cell of the grid by default: light crosses the volume three
@@ -141,6 +151,7 @@ impl Default for LpvSettings {
             reemit_lobe: lpv::DEFAULT_REEMIT_LOBE,
             bounces: lpv::Bounces::Multiple,
             near_occlusion: true,
+            near_field: DEFAULT_NEAR_FIELD,
             sky_lights: DEFAULT_SKY_LIGHTS,
         }
     }
@@ -193,6 +204,12 @@ impl LpvSettings {
             return Err(format!(
                 "LPV damping {} must be within 0..=8 cells",
                 self.damping
+            ));
+        }
+        if self.near_field > MAX_NEAR_FIELD {
+            return Err(format!(
+                "LPV near-field samples {} must be at most {MAX_NEAR_FIELD}",
+                self.near_field
             ));
         }
         if self.sky_lights as usize > MAX_RSM_LIGHTS {
@@ -549,6 +566,8 @@ struct Cascade {
     sky_group: Option<wgpu::BindGroup>,
     lpv_atomic: wgpu::Buffer,
     gv_atomic: wgpu::Buffer,
+    /// The geometry volume: blocking SH at 2i, albedo sums at 2i + 1, per cell corner.
+    gv: wgpu::Buffer,
     buffers: [wgpu::Buffer; 2],
 }
 
@@ -562,6 +581,7 @@ pub struct Lpv {
     /// `lpv-faithful` lit by one directional light: that light's RSM view, whose depth the
     /// report's composite reads as its shadow map ([`Lpv::composite_light`]).
     composite_light: Option<RsmLight>,
+    near_field_light: Option<RsmLight>,
     rsm_pipeline: wgpu::RenderPipeline,
     rsm_group: wgpu::BindGroup,
     rsm_views: Vec<wgpu::TextureView>,
@@ -634,6 +654,10 @@ impl Lpv {
             [(only, _)] if settings.scheme == LpvScheme::Wpi && only.kind == 0 => Some(*only),
             _ => None,
         };
+        let near_field_light = lights
+            .last()
+            .filter(|l| l.0.kind == 0 && l.0.sky == 0 && settings.scheme == LpvScheme::Kaplanyan)
+            .map(|l| l.0);
         let uniform_bytes = setup::uniform_slots(&settings, &grids, bound, wind);
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lpv uniforms"),
@@ -675,6 +699,7 @@ impl Lpv {
             grids,
             light_sizes,
             composite_light,
+            near_field_light,
             rsm_pipeline,
             rsm_group,
             rsm_views,
@@ -748,6 +773,24 @@ impl Lpv {
     /// reads as its shadow map. None otherwise: the usual light passes light the frame.
     pub fn composite_light(&self) -> Option<&RsmLight> {
         self.composite_light.as_ref()
+    }
+
+    /// The last light rendered into the RSM textures (after the camera's and the sky's views)
+    /// when it is directional and the scheme Kaplanyan's: the near field gathers from its
+    /// texels ([`LpvSettings::near_field`]).
+    pub fn near_field_light(&self) -> Option<&RsmLight> {
+        self.near_field_light.as_ref()
+    }
+
+    /// The finest cascade's geometry volume (blocking SH at 2i, albedo sums at 2i + 1, per
+    /// cell corner).
+    pub fn finest_geometry_volume(&self) -> &wgpu::Buffer {
+        &self.cascades.last().expect("at least one cascade").gv
+    }
+
+    /// The RSM's views (flux, normal, position) of the last light rendered.
+    pub fn rsm_views(&self) -> &[wgpu::TextureView] {
+        &self.rsm_views
     }
 
     /// The RSM's position texture (world position, w = texel area; 0 = empty) of the last

@@ -378,6 +378,7 @@ pub(super) fn cascade(device: &wgpu::Device, c: &CascadeInputs, n: u32) -> Casca
         sky_group: c.sky_rsm.map(|rsm| group(&buffers[1], &buffers[0], rsm)),
         lpv_atomic,
         gv_atomic,
+        gv,
         buffers,
     }
 }

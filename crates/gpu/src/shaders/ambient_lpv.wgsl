@@ -100,6 +100,93 @@ fn lpv_surroundings(p: vec3<f32>, n: vec3<f32>) -> Surroundings {
     return Surroundings(v.r * k, v.g * k, v.b * k);
 }
 
+// ---- the near field, gathered from the last light's RSM ------------------------------------
+// (Dachsbacher & Stamminger 2005's RSM gathering, within the lookup's reach only: the light of
+// the surfaces nearer than the volume resolves, which near occlusion takes out of the volume's
+// light.)
+
+@group(2) @binding(13) var rsm_flux: texture_2d<f32>;
+@group(2) @binding(14) var rsm_normal: texture_2d<f32>;
+// The finest cascade's geometry volume (blocking SH at 2i, per cell corner).
+@group(2) @binding(15) var<storage, read> near_gv: array<vec4<f32>>;
+
+// Transmittance from p to x along l through the finest cascade's geometry volume: the nearest
+// node at each point a whole number of cells from p and at least a cell from both ends,
+// 1 − max(B(l), B(−l)) each (blockers from both sides, as the propagation). Nearer the ends
+// the nearest nodes hold the ends' own surfaces (a wall's node blocked what the ground beside
+// it sent).
+fn near_transmittance(p: vec3<f32>, x: vec3<f32>, l: vec3<f32>) -> f32 {
+    let g = lpv_u.grids[lpv_u.cascades - 1u];
+    let gn = i32(lpv_u.size) + 1;
+    let m = i32(floor(length(x - p) / g.w)) - 1;
+    let yf = vec4<f32>(0.2820948, 0.4886025 * l.y, 0.4886025 * l.z, 0.4886025 * l.x);
+    let yb = vec4<f32>(yf.x, -yf.yzw);
+    var t = 1.0;
+    for (var j = 1; j <= m; j++) {
+        let k = vec3<i32>(round((p + l * (f32(j) * g.w) - g.xyz) / g.w));
+        if any(k < vec3<i32>(0)) || any(k >= vec3<i32>(gn)) {
+            continue;
+        }
+        let b = near_gv[2 * ((k.z * gn + k.y) * gn + k.x)];
+        t *= 1.0 - clamp(max(dot(b, yf), dot(b, yb)), 0.0, 1.0);
+    }
+    return t;
+}
+
+// The irradiance on n at p from the surfaces the RSM's light lights within `radius` of p:
+// `near_samples` texels on a spiral over the disc of that radius around p's texel, at radii
+// spaced evenly (density ∝ 1/r, which the 1/d² fall-off favours), each standing for its share
+// of the disc's texels (2π·r·R/N). The spiral turns and shifts over each 2 × 2 pixels (Keller &
+// Heidrich's interleaved sampling), so that supersampling averages four patterns: one pattern
+// for all pixels drew bands where its few far samples met thin lit surfaces (the atrium's
+// columns). A texel is a Lambertian patch of flux Φ (its normal turned to the light; w:
+// diffuse transmission t, so 1 − t of Φ leaves on the lit side and t through the back) and
+// surface area A = A⊥/|n_p·l_light|; its irradiance at distance d, Φ·cos_p·cos / (π d² + A),
+// is the disc formula, bounded where d is small. Texels within a texel's side of p (its own
+// surface) and beyond the radius are skipped.
+fn rsm_near_field(p: vec3<f32>, n: vec3<f32>, radius: f32, pixel: vec2<f32>) -> vec3<f32> {
+    var e = vec3<f32>(0.0);
+    let count = lpv_u.near_samples;
+    if count == 0u || radius <= 0.0 {
+        return e;
+    }
+    let side = lpv_u.near.w;
+    let dims = vec2<i32>(textureDimensions(rsm_position, 0));
+    let c = lpv_u.rsm_view_proj * vec4<f32>(p, 1.0);
+    let uv = vec2<f32>(c.x * 0.5 + 0.5, 0.5 - c.y * 0.5) * vec2<f32>(dims);
+    let rt = radius / side;
+    let cell = vec2<u32>(pixel) % vec2<u32>(2u);
+    let pattern = f32(cell.x + 2u * cell.y);
+    let shift = (pattern + 0.5) / 4.0;
+    for (var i = 0u; i < count; i++) {
+        let r = rt * (f32(i) + shift) / f32(count);
+        let a = (f32(i) + pattern * 0.25) * 2.39996323;
+        let share = 2.0 * PI * r * rt / f32(count);
+        let t = vec2<i32>(floor(uv + r * vec2<f32>(cos(a), sin(a))));
+        if any(t < vec2<i32>(0)) || any(t >= dims) {
+            continue;
+        }
+        let q = textureLoad(rsm_position, t, 0);
+        let d = q.xyz - p;
+        let d2 = dot(d, d);
+        if q.w <= 0.0 || d2 > radius * radius || d2 < side * side {
+            continue;
+        }
+        let l = d * inverseSqrt(d2);
+        let cos_r = dot(n, l);
+        if cos_r <= 0.0 {
+            continue;
+        }
+        let np = textureLoad(rsm_normal, t, 0);
+        let cp = dot(np.xyz, -l);
+        let emit = (1.0 - np.w) * max(cp, 0.0) + np.w * max(-cp, 0.0);
+        let area = q.w * share / max(abs(dot(np.xyz, lpv_u.near.xyz)), 0.25);
+        let phi = textureLoad(rsm_flux, t, 0).rgb * share;
+        e += phi * (emit * cos_r / (PI * d2 + area)) * near_transmittance(p, q.xyz, l);
+    }
+    return e;
+}
+
 // ---- lpv-faithful's composite (the WPI report's App. B, defCompositor) ----------------------
 
 // The RSM's world positions (w: texel area, 0 = empty) of the composite's light: its shadow map.
@@ -189,8 +276,12 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>, glossy: vec3<f32>) 
     var e = lpv_irradiance(s.p, s.n) * sky_t.far;
     if s.transmission > 0.0 {
         // Thin foliage (diffuse transmission t): 1 − t of the light arriving on the front is
-        // reflected, t of the light arriving on the back leaves through the front.
+        // reflected, t of the light arriving on the back leaves through the front. No near
+        // field: within a canopy the leaves between are finer than the geometry volume's
+        // cells, and the gathered light over-lit the bush's leaves (docs/lpv.md).
         e = (1.0 - s.transmission) * e + s.transmission * lpv_irradiance(s.p, -s.n) * sky_t.far_back;
+    } else {
+        e += rsm_near_field(s.p, s.n, lpv_u.occlusion_radius, in.clip.xy);
     }
     let indirect = s.diffuse / PI * e;
     if lpv_u.indirect_only == 1u {

@@ -72,14 +72,18 @@ struct LpvAmbientUniforms {
     // Sub-cell occlusion of the volume's light: the radius [m] within which the sky's depth maps
     // count a surface as occluding (0: off).
     occlusion_radius: f32,
-    pad1: u32,
+    // The near field gathered from the last light's RSM: samples per pixel (0: off).
+    near_samples: u32,
     pad2: u32,
     grids: array<vec4<f32>, 4>,
     // lpv-faithful's composite (App. B): the sun's direction of travel (w = 1: on), its
-    // irradiance (w: shadow bias in RSM depth), its RSM's view-projection.
+    // irradiance (w: shadow bias in RSM depth); the view-projection of the RSM it or the near
+    // field reads.
     sun_dir: vec4<f32>,
     sun_e: vec4<f32>,
     rsm_view_proj: mat4x4<f32>,
+    // The near field's light: its direction of travel, w the RSM's texel side [m].
+    near: vec4<f32>,
 }
 
 // One light. kind: 0 point, 1 spot, 2 directional, 3 area (a Lambertian rectangle: centre

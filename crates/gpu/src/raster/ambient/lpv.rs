@@ -1,7 +1,8 @@
 //! The volume source: the light propagation volume (recomputed every frame by its pre-passes)
 //! read trilinearly from its three 3D textures, and the sky's light occluded through the
-//! `sky` source's shadow-mapped directions (bindings 8–10 and 12; 17 sampled textures in all, past
-//! the 16 of wgpu's default limits, so the device asks for the adapter's).
+//! `sky` source's shadow-mapped directions (bindings 8–10 and 12), and the near field gathered
+//! from the last light's RSM (bindings 11, 13–15; 19 sampled textures in all, past the 16 of
+//! wgpu's default limits, so the device asks for the adapter's).
 
 use super::super::bindings::entry;
 use crate::GpuContext;
@@ -50,6 +51,17 @@ impl LpvSource {
         for (k, grid) in volume.grids.iter().enumerate() {
             u.grids[k] = grid.origin.extend(grid.cell).to_array();
         }
+        // The near field fills what near occlusion takes out of the volume's light: it needs
+        // the lookup's reach, the sky's directions that find the near surfaces, and a
+        // directional light's RSM left in the textures.
+        if let Some(l) = volume.near_field_light()
+            && u.occlusion_radius > 0.0
+            && sky.directions() > 0
+        {
+            u.near_samples = volume.settings.near_field;
+            u.near = [l.axis[0], l.axis[1], l.axis[2], l.texel.sqrt()];
+            u.rsm_view_proj = l.view_proj;
+        }
         if let Some(l) = volume.composite_light() {
             u.sun_dir = [l.axis[0], l.axis[1], l.axis[2], 1.0];
             u.sun_e = [l.color[0], l.color[1], l.color[2], COMPOSITE_SHADOW_BIAS];
@@ -96,6 +108,9 @@ impl LpvSource {
             entry(6, R::TextureView(&self.views[2])),
             entry(7, R::Sampler(&self.sampler)),
             entry(11, R::TextureView(self.volume.rsm_position_view())),
+            entry(13, R::TextureView(&self.volume.rsm_views()[0])),
+            entry(14, R::TextureView(&self.volume.rsm_views()[1])),
+            entry(15, self.volume.finest_geometry_volume().as_entire_binding()),
         ];
         e.extend(self.sky.entries());
         e

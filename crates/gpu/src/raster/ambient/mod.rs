@@ -99,6 +99,17 @@ impl SourceKind {
                         wgpu::TextureSampleType::Float { filterable: false },
                         Dim::D2,
                     ),
+                    super::bindings::texture(
+                        13,
+                        wgpu::TextureSampleType::Float { filterable: false },
+                        Dim::D2,
+                    ),
+                    super::bindings::texture(
+                        14,
+                        wgpu::TextureSampleType::Float { filterable: false },
+                        Dim::D2,
+                    ),
+                    super::bindings::storage(15),
                 ],
                 sky::layout_entries(),
             ]

@@ -300,6 +300,11 @@ impl SkyOcclusion {
 
     /// Render the depth maps again (objects have moved; the directions' frusta keep the
     /// bounds the occlusion was made with).
+    /// The number of shadow-mapped sky directions (0: a dummy that occludes nothing).
+    pub fn directions(&self) -> usize {
+        self.view_projs.len()
+    }
+
     pub fn rerender(&self, ctx: &GpuContext, gscene: &GpuScene) {
         render_maps(ctx, gscene, &self.texture, &self.view_projs);
     }
