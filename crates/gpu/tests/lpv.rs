@@ -10,11 +10,17 @@ use lightlab_gpu::{GpuContext, test_context};
 use lightlab_scene::Scene;
 
 fn render_lpv(ctx: &GpuContext, scene: &Scene, s: &LpvSettings) -> Renderer {
+    render_lpv_in(ctx, scene, s, Ambient::None)
+}
+
+/// The volume's indirect light at 64², with `ambient` (an environment turns on near occlusion
+/// and the near field).
+fn render_lpv_in(ctx: &GpuContext, scene: &Scene, s: &LpvSettings, ambient: Ambient) -> Renderer {
     let rs = RasterSettings {
         width: 64,
         height: 64,
         shadows: ShadowMethod::None,
-        ambient: Ambient::None,
+        ambient,
         ..Default::default()
     };
     let mut r = Renderer::with_lpv(ctx, scene, rs, s, true).unwrap();
@@ -397,14 +403,7 @@ fn moving_the_camera_by_a_fraction_of_a_cell_does_not_flicker() {
     // With the room's sky: near occlusion and the near field gathered from the sun's RSM are
     // on, and both move with the finest cascade.
     let render = |s: &LpvSettings| {
-        let rs = RasterSettings {
-            width: 64,
-            height: 64,
-            shadows: ShadowMethod::None,
-            ambient: Ambient::Environment,
-            ..Default::default()
-        };
-        let mut r = Renderer::with_lpv(&ctx, &scene, rs, s, true).unwrap();
+        let mut r = render_lpv_in(&ctx, &scene, s, Ambient::Environment);
         assert!(r.lpv().unwrap().near_occlusion_radius() > 0.0);
         r.render(&ctx);
         r.read_hdr(&ctx).unwrap()
