@@ -10,6 +10,11 @@
 @group(2) @binding(6) var lpv_b: texture_3d<f32>;
 @group(2) @binding(7) var lpv_sampler: sampler;
 
+// The 2-band real SH basis towards d, in the volume's order (Y00, Y1−1, Y10, Y11: 1, y, z, x).
+fn sh2(d: vec3<f32>) -> vec4<f32> {
+    return vec4<f32>(0.2820948, 0.4886025 * d.y, 0.4886025 * d.z, 0.4886025 * d.x);
+}
+
 // The LPV's three colour SH read trilinearly at q in cascade c (the cascades are stacked along
 // z; reads clamp to the cascade's cell centres, as lightlab_core::lpv::Volume::sample).
 struct LpvSample {
@@ -34,8 +39,7 @@ fn lpv_sample(q: vec3<f32>, c: u32) -> LpvSample {
 fn lpv_read(q: vec3<f32>, n: vec3<f32>, c: u32) -> vec3<f32> {
     let s = lpv_u.grids[c].w;
     let v = lpv_sample(q, c);
-    let m = -n;
-    let y = vec4<f32>(0.2820948, 0.4886025 * m.y, 0.4886025 * m.z, 0.4886025 * m.x);
+    let y = sh2(-n);
     let k = vec4<f32>(PI, 2.0 * PI / 3.0, 2.0 * PI / 3.0, 2.0 * PI / 3.0) * y / (s * s);
     return max(vec3<f32>(dot(v.r, k), dot(v.g, k), dot(v.b, k)), vec3<f32>(0.0));
 }
@@ -60,8 +64,7 @@ fn lpv_irradiance(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     if lpv_u.mode == 2u {
         let q = p + 0.001 * lpv_u.grids[0].w * lpv_u.size * n;
         let v = lpv_sample(q, 0u);
-        let m = -n;
-        let y = vec4<f32>(0.2820948, 0.4886025 * m.y, 0.4886025 * m.z, 0.4886025 * m.x);
+        let y = sh2(-n);
         return max(vec3<f32>(dot(v.r, y), dot(v.g, y), dot(v.b, y)), vec3<f32>(0.0));
     }
     let cw = lpv_cascade_of(p);
@@ -119,8 +122,8 @@ fn near_transmittance(p: vec3<f32>, x: vec3<f32>, l: vec3<f32>) -> f32 {
     let g = lpv_u.grids[lpv_u.cascades - 1u];
     let gn = i32(lpv_u.size) + 1;
     let m = i32(floor(length(x - p) / g.w)) - 1;
-    let yf = vec4<f32>(0.2820948, 0.4886025 * l.y, 0.4886025 * l.z, 0.4886025 * l.x);
-    let yb = vec4<f32>(yf.x, -yf.yzw);
+    let yf = sh2(l);
+    let yb = sh2(-l);
     var t = 1.0;
     for (var j = 1; j <= m; j++) {
         let k = vec3<i32>(round((p + l * (f32(j) * g.w) - g.xyz) / g.w));
@@ -223,7 +226,7 @@ fn wpi_shadow(p: vec3<f32>) -> f32 {
 
 // The volume's SH (r, g, b) evaluated towards d.
 fn lpv_toward(v: LpvSample, d: vec3<f32>) -> vec3<f32> {
-    let y = vec4<f32>(0.2820948, 0.4886025 * d.y, 0.4886025 * d.z, 0.4886025 * d.x);
+    let y = sh2(d);
     return vec3<f32>(dot(v.r, y), dot(v.g, y), dot(v.b, y));
 }
 
