@@ -100,6 +100,23 @@ fn agreement(masks: &[Vec<u8>], cpu: &[Vec<Option<bool>>]) -> (f64, usize) {
 }
 
 fn masks(ctx: &GpuContext, scene: &Scene, camera: usize, shadows: ShadowMethod) -> Vec<Vec<u8>> {
+    masks_sized(
+        ctx,
+        scene,
+        camera,
+        shadows,
+        RasterSettings::default().shadow_size,
+    )
+}
+
+/// [`masks`] with shadow maps of `shadow_size`² texels.
+fn masks_sized(
+    ctx: &GpuContext,
+    scene: &Scene,
+    camera: usize,
+    shadows: ShadowMethod,
+    shadow_size: u32,
+) -> Vec<Vec<u8>> {
     let mut r = Renderer::new(
         ctx,
         scene,
@@ -109,6 +126,7 @@ fn masks(ctx: &GpuContext, scene: &Scene, camera: usize, shadows: ShadowMethod) 
             camera,
             shadows,
             attenuation: Attenuation::InverseSquare,
+            shadow_size,
             ..Default::default()
         },
     )
@@ -212,6 +230,114 @@ fn directional_cascades_match_ray_cast_visibility() {
         assert!(n > 10_000, "too few pixels compared: {n}");
         assert!(a >= 0.99, "{method:?} agreement {a}");
     }
+}
+
+/// A stack of thin double-sided quads (leaves) over a ground under a low sun, `gap` apart:
+/// each shadows part of the one below it.
+fn leaf_stack(gap: f32) -> Scene {
+    use lightlab_scene::builtin::geom::quad;
+    use lightlab_scene::{Light, Material};
+    let mut s = Scene::default();
+    let ground = s.add_material(Material::diffuse("ground", Vec3::splat(0.5)));
+    let leaf = s.add_material(Material {
+        double_sided: true,
+        ..Material::diffuse("leaf", Vec3::splat(0.5))
+    });
+    let square = |y: f32, x0: f32, h: f32| {
+        [
+            Vec3::new(x0 - h, y, h),
+            Vec3::new(x0 + h, y, h),
+            Vec3::new(x0 + h, y, -h),
+            Vec3::new(x0 - h, y, -h),
+        ]
+    };
+    s.add_mesh(
+        quad("ground", square(0.0, 0.0, 1.5), ground),
+        glam::Mat4::IDENTITY,
+    );
+    for k in 0..4 {
+        // Each leaf sits `gap` below the last, shifted away from the sun by a fifth of its width.
+        let y = 0.5 - k as f32 * gap;
+        s.add_mesh(
+            quad("leaf", square(y, -0.08 * k as f32, 0.2), leaf),
+            glam::Mat4::IDENTITY,
+        );
+    }
+    // The sun 12° above the horizon, from +x: 78° from the leaves' normal.
+    let e = 12f32.to_radians();
+    s.lights.push(Light {
+        name: "sun".into(),
+        kind: LightKind::Directional {
+            angular_diameter: 0.0,
+        },
+        color: Vec3::ONE,
+        intensity: 1.0,
+        position: Vec3::ZERO,
+        direction: Vec3::new(-e.cos(), -e.sin(), 0.0),
+        range: None,
+    });
+    s.cameras.push(Camera::look_at(
+        "above",
+        Vec3::new(-0.3, 1.2, 0.3),
+        Vec3::new(-0.35, 0.45, 0.0),
+        Vec3::Y,
+        30f32.to_radians(),
+    ));
+    s
+}
+
+/// Thin casters stacked closely under a grazing sun (a canopy's leaves), 8 mm apart: about two
+/// texels of the 256² cascade that holds them, 78° from the sun. The shadow pass's
+/// slope-scaled bias pushes a grazing caster back by 0.5·tan θ texels along the light, and the
+/// PCF taps compare against the receiver's own plane, so the leaf below is shadowed while no
+/// lit surface shadows itself. Lit image against the path tracer: relMSE 0.0040; 0.0064
+/// without the receiver plane (acne), 0.0123 with its sign flipped. With the former bias of
+/// 1.5·tan θ texels (and a normal offset of 0.75 texels) 0.07 of the shadowed pixels were
+/// shadowed, relMSE 0.0186.
+#[test]
+fn closely_stacked_leaves_shadow_each_other_under_a_grazing_sun() {
+    let Some(ctx) = test_context() else {
+        return;
+    };
+    let scene = leaf_stack(0.008);
+    let cpu = cpu_visibility(&scene, 0);
+    let m = masks_sized(&ctx, &scene, 0, ShadowMethod::Map, 256);
+    let part = |v: bool| {
+        let mut c = cpu.clone();
+        c[0].iter_mut()
+            .filter(|x| **x != Some(v))
+            .for_each(|x| *x = None);
+        agreement(&m, &c)
+    };
+    let (lit, nl) = part(true);
+    let (dark, nd) = part(false);
+    eprintln!("leaves 8 mm apart: lit {lit:.5} of {nl}, shadowed {dark:.5} of {nd} pixels");
+    // Acne under PCF dims lit pixels partly, which the masks' threshold hides: the lit image
+    // against the path tracer's direct light.
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        RasterSettings {
+            width: N,
+            height: N,
+            shadows: ShadowMethod::Map,
+            ambient: Ambient::None,
+            shadow_size: 256,
+            ..Default::default()
+        },
+    )
+    .expect("renderer");
+    r.render(&ctx);
+    let img = r.read_hdr(&ctx).unwrap();
+    let e = lightlab_core::metrics::relmse(&img, &direct_reference(&scene, 16, 5)).unwrap();
+    eprintln!("lit image against the path tracer's direct light: relMSE {e:.5}");
+    assert!(
+        nl > 20_000 && nd > 5_000,
+        "too few pixels compared: {nl}, {nd}"
+    );
+    assert!(lit >= 0.999, "lit surfaces shadow themselves: {lit}");
+    assert!(dark >= 0.85, "light leaks between the leaves: {dark}");
+    assert!(e <= 0.005, "lit image against the direct light: relMSE {e}");
 }
 
 /// Direct light of `scene`'s point lights on the GPU with shadow volumes, no ambient, 4 × 4

@@ -203,13 +203,15 @@ pub struct RasterSettings {
     pub shadow_size: u32,
     pub pcf_radius: i32,
     /// Normal offset in texels: a shadow-map lookup moves this far off the surface along its
-    /// geometric normal (on top of the shadow pass's depth biases). 0.75 by default: 1.5 let
-    /// light through the bush's leaves (`phong-shadow-maps` against `reference` on bush 1.09×
-    /// → 0.98× `direct`'s error, `lpv` 0.93× → 0.86×) and took nothing from acne elsewhere
-    /// (room, atrium, shadows within 0.2 %; the shadow-map tests' agreement with ray casts
-    /// 0.99479 → 0.99481; docs/phong-and-shadows.md).
+    /// geometric normal (on top of the shadow pass's depth biases). 0.5 by default, with the
+    /// PCF taps compared against the receiver's plane (docs/phong-and-shadows.md): 0.25 drew
+    /// acne on the room's sunlit floor.
     pub normal_offset: f32,
-    /// Slope-scaled depth bias of the shadow-map pass.
+    /// Slope-scaled depth bias of the shadow-map pass, in texels × tan θ along the light. 0.5 by
+    /// default: 1.5 pushed a grazing leaf's depth back by 1.5·tan θ texels (8.5 at 80°), and the
+    /// leaves behind it within that reach were lit through it (`phong-shadow-maps` against
+    /// `direct` on bush 0.00363 → 0.00296 with the receiver plane; room and the atrium
+    /// 0.00255 → 0.00246, 0.00742 → 0.00721).
     pub slope_bias: f32,
     /// Constant depth bias (depth-buffer units) of the shadow-map pass.
     pub constant_bias: i32,
@@ -313,8 +315,8 @@ impl Default for RasterSettings {
             ambient: Ambient::Environment,
             shadow_size: 2048,
             pcf_radius: 1,
-            normal_offset: 0.75,
-            slope_bias: 1.5,
+            normal_offset: 0.5,
+            slope_bias: 0.5,
             constant_bias: 2,
             linear_bias: 0.002,
             cascades: 4,

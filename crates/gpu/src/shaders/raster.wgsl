@@ -326,6 +326,31 @@ fn shadow_uvz(sv: ShadowView, x: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(n.x * 0.5 + 0.5, 0.5 - n.y * 0.5, n.z);
 }
 
+// The receiver's plane in the shadow map: dz/duv at (uv, z), from the points `e` away from q
+// along two tangents of its geometric normal ng (0 where the plane is seen edge-on). A tap at
+// uv + o then compares against z + grad·o, the receiver's own depth there, so taps spread
+// over a slanted receiver do not shadow it (receiver-plane depth bias).
+fn receiver_plane(sv: ShadowView, q: vec3<f32>, ng: vec3<f32>, uv: vec2<f32>, z: f32, e: f32) -> vec2<f32> {
+    let inv = 1.0 / frame.shadow_size;
+    var t1 = cross(ng, vec3<f32>(0.0, 1.0, 0.0));
+    if dot(t1, t1) < 1e-4 {
+        t1 = cross(ng, vec3<f32>(1.0, 0.0, 0.0));
+    }
+    t1 = normalize(t1);
+    let t2 = cross(ng, t1);
+    let p1 = shadow_uvz(sv, q + t1 * e);
+    let p2 = shadow_uvz(sv, q + t2 * e);
+    let a = p1.xy - uv;
+    let b = p2.xy - uv;
+    let det = a.x * b.y - a.y * b.x;
+    if abs(det) <= 1e-3 * inv * inv {
+        return vec2<f32>(0.0);
+    }
+    let dz1 = p1.z - z;
+    let dz2 = p2.z - z;
+    return vec2<f32>(b.y * dz1 - a.y * dz2, a.x * dz2 - b.x * dz1) / det;
+}
+
 const AREA_SEARCH_TAPS: u32 = 16u;
 const AREA_FILTER_TAPS: u32 = 32u;
 const GOLDEN_ANGLE: f32 = 2.3999632;
@@ -358,25 +383,7 @@ fn area_shadow(
     let d_r = shadow_linear_depth(sv, z);
     let ts = sv.texel_scale;
     let inv = 1.0 / frame.shadow_size;
-    // Receiver plane: dz/duv from points one texel away along two tangents.
-    var t1 = cross(ng, vec3<f32>(0.0, 1.0, 0.0));
-    if dot(t1, t1) < 1e-4 {
-        t1 = cross(ng, vec3<f32>(1.0, 0.0, 0.0));
-    }
-    t1 = normalize(t1);
-    let t2 = cross(ng, t1);
-    let e = ts * d_r;
-    let p1 = shadow_uvz(sv, q + t1 * e);
-    let p2 = shadow_uvz(sv, q + t2 * e);
-    let a = p1.xy - uv;
-    let b = p2.xy - uv;
-    let det = a.x * b.y - a.y * b.x;
-    var grad = vec2<f32>(0.0);
-    if abs(det) > 1e-3 * inv * inv {
-        let dz1 = p1.z - z;
-        let dz2 = p2.z - z;
-        grad = vec2<f32>(b.y * dz1 - a.y * dz2, a.x * dz2 - b.x * dz1) / det;
-    }
+    let grad = receiver_plane(sv, q, ng, uv, z, ts * d_r);
     let phi = 6.2831853 * fract(sin(dot(q, vec3<f32>(12.9898, 78.233, 37.719))) * 43758.547);
     let cap = 0.15;
     // Blockers between a quarter of the receiver's depth and the receiver can hide the light.
@@ -444,10 +451,11 @@ fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
     var sum = 0.0;
     var count = 0.0;
     if frame.shadow_mode == 1u {
+        let grad = receiver_plane(sv, q, nl, uv, ndc.z, texel);
         for (var y = -r; y <= r; y++) {
             for (var x = -r; x <= r; x++) {
                 let o = vec2<f32>(f32(x), f32(y)) * inv;
-                sum += textureSampleCompareLevel(shadow_depth, shadow_cmp, uv + o, i32(vi), ndc.z);
+                sum += textureSampleCompareLevel(shadow_depth, shadow_cmp, uv + o, i32(vi), ndc.z + dot(grad, o));
                 count += 1.0;
             }
         }
