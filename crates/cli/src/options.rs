@@ -1265,8 +1265,9 @@ pub struct LpvArgs {
     pub no_lpv_near_occlusion: bool,
     /// `lpv`: RSM texels per pixel for the near field, the light of the surfaces within the
     /// lookup's reach (which near occlusion takes out of the volume's light), gathered from
-    /// the sun's reflective shadow map and occluded through the geometry volume, on opaque
-    /// surfaces; 0 = none (at most 256).
+    /// the sun's reflective shadow map and occluded through the geometry volume; on thin
+    /// translucent surfaces (leaves) it takes the place of the sun's share of the volume's
+    /// light; 0 = none (at most 256).
     #[arg(long, default_value_t = lightlab_gpu::lpv::DEFAULT_NEAR_FIELD)]
     pub lpv_near_field: u32,
     /// `lpv`: the sky's diffuse light enters the volume as this many directional RSM views

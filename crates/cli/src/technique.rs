@@ -65,7 +65,8 @@ impl Family {
                  the lights and of the sky (lpv: 16 directional views, --lpv-sky-lights; \
                  multiple bounces, --lpv-bounces), from the directions whose first surface lies \
                  beyond its cells (lpv: --no-lpv-near-occlusion), the nearer ones' light \
-                 gathered from the sun's RSM on opaque surfaces (lpv: --lpv-near-field); lpv's \
+                 gathered from the sun's RSM (lpv: --lpv-near-field; on leaves in place of \
+                 the sun's share of the volume's light); lpv's \
                  glossy reflection occluded by the directions in its lobe, the volume's light \
                  where they are hidden"
                     .into()

@@ -83,7 +83,9 @@ pub struct LpvAmbientUniforms {
     pub occlusion_radius: f32,
     /// The near field gathered from the last light's RSM: samples per pixel (0: off).
     pub near_samples: u32,
-    pub pad2: u32,
+    /// The near field's light's share of the volume's light (`Lpv::near_field_share`): what
+    /// the near field replaces of it on thin translucent surfaces.
+    pub near_share: f32,
     pub grids: [[f32; 4]; 4],
     /// `lpv-faithful`'s composite (the WPI report's App. B): the sun's direction of travel
     /// (w: 1 when the composite replaces the light passes).
@@ -256,7 +258,7 @@ mod tests {
                     cascades,
                     occlusion_radius,
                     near_samples,
-                    pad2,
+                    near_share,
                     grids,
                     sun_dir,
                     sun_e,

@@ -1043,25 +1043,14 @@ fn point_sun(direction: Vec3, irradiance: f32) -> lightlab_scene::Light {
     }
 }
 
-#[test]
-fn the_near_field_lights_a_wall_from_the_sunlit_ground_beside_it() {
-    // A 3 m wall on a 10 m ground under a sun straight down (irradiance 2) and a dim sky. The
-    // wall's side gets no sun; the ground by it, radiosity B = ½·2, lights it. Near occlusion
-    // takes the ground within the lookup's reach out of the volume's light, and the near field
-    // gathers it back from the sun's RSM: the difference it makes on the wall's side is the
-    // single bounce from the lit ground within the reach,
-    // E = ∫ B/π · cos_ground · cos_wall / d² dA, computed here on a 2 cm grid.
-    let Some(ctx) = test_context() else { return };
+/// A grey (albedo ½) 10 m ground under a sun straight down (irradiance 2, so radiosity 1)
+/// and a dim sky, seen from `eye` on +x towards (0, 0.6, 0); and its material.
+fn sunlit_ground(eye: Vec3) -> (Scene, usize) {
     let mut scene = Scene::default();
     let m = scene.add_material(lightlab_scene::Material::diffuse("grey", Vec3::splat(0.5)));
     let c = [(-5.0, 5.0), (5.0, 5.0), (5.0, -5.0), (-5.0, -5.0)].map(|(x, z)| Vec3::new(x, 0.0, z));
     scene.add_mesh(
         lightlab_scene::builtin::geom::quad("ground", c, m),
-        glam::Mat4::IDENTITY,
-    );
-    let wall = (Vec3::new(-0.1, 0.0, -3.0), Vec3::new(0.1, 3.0, 3.0));
-    scene.add_mesh(
-        lightlab_scene::builtin::geom::aabb_box("wall", wall.0, wall.1, m),
         glam::Mat4::IDENTITY,
     );
     scene.lights.push(point_sun(Vec3::NEG_Y, 2.0));
@@ -1071,53 +1060,49 @@ fn the_near_field_lights_a_wall_from_the_sunlit_ground_beside_it() {
     });
     scene.cameras.push(lightlab_scene::Camera::look_at(
         "side",
-        Vec3::new(2.5, 0.8, 0.0),
+        eye,
         Vec3::new(0.0, 0.6, 0.0),
         Vec3::Y,
         1.0,
     ));
-    let size = 64u32;
-    let render = |near_field| {
-        let s = LpvSettings {
-            near_field,
-            ..Default::default()
-        };
-        let rs = RasterSettings {
-            width: size * 2,
-            height: size * 2,
-            shadows: ShadowMethod::Map,
-            ambient: Ambient::Environment,
-            ..Default::default()
-        };
-        let mut r = Renderer::with_lpv(&ctx, &scene, rs, &s, true).unwrap();
-        let radius = r.lpv().unwrap().near_occlusion_radius();
-        r.render(&ctx);
-        (r.read_hdr(&ctx).unwrap().downsample(2), radius)
+    (scene, m)
+}
+
+/// `lpv`'s indirect light alone on `scene` at size², 2 × 2 supersampled, with the near field's
+/// `near_field` texels; and the volume.
+fn sunlit_indirect(
+    ctx: &GpuContext,
+    scene: &Scene,
+    size: u32,
+    near_field: u32,
+) -> (Image, Renderer) {
+    let s = LpvSettings {
+        near_field,
+        ..Default::default()
     };
-    let (on, radius) = render(lightlab_gpu::lpv::DEFAULT_NEAR_FIELD);
-    let (off, _) = render(0);
-    assert!(radius > 0.5, "{radius}");
+    let rs = RasterSettings {
+        width: size * 2,
+        height: size * 2,
+        shadows: ShadowMethod::Map,
+        ambient: Ambient::Environment,
+        ..Default::default()
+    };
+    let mut r = Renderer::with_lpv(ctx, scene, rs, &s, true).unwrap();
+    r.render(ctx);
+    (r.read_hdr(ctx).unwrap().downsample(2), r)
+}
+
+/// The pixels (x, y) of a size² view of `scene`'s camera that see the plane x = `plane` from
+/// +x at heights `heights` within `half` of z = 0, and the point seen.
+fn plane_pixels(
+    scene: &Scene,
+    size: u32,
+    plane: f32,
+    heights: std::ops::Range<f32>,
+    half: f32,
+) -> Vec<(u32, u32, Vec3)> {
     let cam = scene.default_camera().unwrap();
-    let lum = lightlab_core::color::luminance;
-    // Single bounce from the lit ground (x > 0.1) within the reach onto the wall's side.
-    let expected = |p: Vec3| -> f32 {
-        let (step, mut e) = (0.02f32, 0.0f32);
-        let n = (radius / step).ceil() as i32;
-        for i in 0..n {
-            for k in -n..=n {
-                let g = Vec3::new(0.1 + (i as f32 + 0.5) * step, 0.0, p.z + k as f32 * step);
-                let d = g - p;
-                let d2 = d.length_squared();
-                if d2 > radius * radius {
-                    continue;
-                }
-                let (cos_g, cos_w) = (p.y / d2.sqrt(), d.x / d2.sqrt());
-                e += 1.0 / std::f32::consts::PI * cos_g * cos_w / d2 * step * step;
-            }
-        }
-        e
-    };
-    let (mut gpu, mut cpu, mut count) = (0.0f64, 0.0f64, 0);
+    let mut out = vec![];
     for y in 0..size {
         for x in 0..size {
             let ndc = glam::Vec2::new(
@@ -1125,19 +1110,116 @@ fn the_near_field_lights_a_wall_from_the_sunlit_ground_beside_it() {
                 1.0 - (y as f32 + 0.5) / size as f32 * 2.0,
             );
             let (o, d) = (cam.position(), cam.ray_direction(ndc, 1.0));
-            let t = (0.1 - o.x) / d.x;
-            let p = o + d * t;
-            if d.x >= 0.0 || !(0.15..1.5).contains(&p.y) || p.z.abs() > 1.5 {
-                continue;
+            let p = o + d * ((plane - o.x) / d.x);
+            if d.x < 0.0 && heights.contains(&p.y) && p.z.abs() <= half {
+                out.push((x, y, p));
             }
-            // Indirect radiance = albedo/π · E.
-            let added = lum(on.get(x, y)) - lum(off.get(x, y));
-            gpu += added as f64;
-            cpu += (0.5 / std::f32::consts::PI * expected(p)) as f64;
-            count += 1;
         }
     }
-    let ratio = gpu / cpu;
+    out
+}
+
+#[test]
+fn a_leaf_gets_the_suns_bounce_once_from_the_near_field_in_place_of_the_volume() {
+    // A thin translucent sheet (diffuse transmission 0.45) standing on the sunlit ground: the
+    // sun's share of the volume's light is 0.97. Both its sides see the lit ground, so its
+    // indirect light is the single bounce from the ground within the reach (the near field,
+    // in place of that share of the volume's light) and 0.03 of the volume's. The volume's
+    // light and the near field added together gave 1.38 of the bounce; the volume's alone
+    // (session 39) 0.50. Measured 0.89.
+    let Some(ctx) = test_context() else { return };
+    let (mut scene, _) = sunlit_ground(Vec3::new(2.5, 0.7, 0.0));
+    let leaf = scene.add_material(lightlab_scene::Material {
+        transmission: 0.45,
+        double_sided: true,
+        ..lightlab_scene::Material::diffuse("leaf", Vec3::splat(0.5))
+    });
+    let sheet =
+        [(0.0, 1.5), (1.2, 1.5), (1.2, -1.5), (0.0, -1.5)].map(|(y, z)| Vec3::new(0.0, y, z));
+    scene.add_mesh(
+        lightlab_scene::builtin::geom::quad("sheet", sheet, leaf),
+        glam::Mat4::IDENTITY,
+    );
+    let size = 64u32;
+    let (img, r) = sunlit_indirect(&ctx, &scene, size, lightlab_gpu::lpv::DEFAULT_NEAR_FIELD);
+    let lpv = r.lpv().unwrap();
+    let (radius, share) = (lpv.near_occlusion_radius(), lpv.near_field_share());
+    assert!(radius > 0.5 && share > 0.9, "reach {radius}, share {share}");
+    let pixels = plane_pixels(&scene, size, 0.0, 0.15..1.0, 1.2);
+    let gpu: f64 = pixels
+        .iter()
+        .map(|&(x, y, _)| lightlab_core::color::luminance(img.get(x, y)) as f64)
+        .sum();
+    let cpu: f64 = pixels
+        .iter()
+        .map(|&(_, _, p)| (0.5 / std::f32::consts::PI * ground_bounce(p, 0.0, radius)) as f64)
+        .sum();
+    let (ratio, count) = (gpu / cpu, pixels.len());
+    eprintln!(
+        "reach {radius:.2} m, share {share:.3}: {count} sheet pixels, indirect light {:.4} \
+         against the near single bounce {:.4} ({ratio:.3})",
+        gpu / count as f64,
+        cpu / count as f64
+    );
+    assert!(count > 300, "{count}");
+    assert!(
+        (0.7..1.25).contains(&ratio),
+        "indirect / single bounce {ratio}"
+    );
+}
+
+/// The irradiance at p, on a surface facing +x, from the ground (y = 0) at x > x0 within
+/// `radius` of p, a Lambertian emitter of radiosity 1: ∫ 1/π · cos_ground · cos / d² dA on a
+/// 2 cm grid.
+fn ground_bounce(p: Vec3, x0: f32, radius: f32) -> f32 {
+    let (step, mut e) = (0.02f32, 0.0f32);
+    let n = (radius / step).ceil() as i32;
+    for i in 0..n {
+        for k in -n..=n {
+            let g = Vec3::new(x0 + (i as f32 + 0.5) * step, 0.0, p.z + k as f32 * step);
+            let d = g - p;
+            let d2 = d.length_squared();
+            if d2 > radius * radius {
+                continue;
+            }
+            let (cos_g, cos_w) = (p.y / d2.sqrt(), d.x / d2.sqrt());
+            e += 1.0 / std::f32::consts::PI * cos_g * cos_w / d2 * step * step;
+        }
+    }
+    e
+}
+
+#[test]
+fn the_near_field_lights_a_wall_from_the_sunlit_ground_beside_it() {
+    // A 3 m wall on the sunlit ground. The wall's side gets no sun; the ground by it lights
+    // it. Near occlusion takes the ground within the lookup's reach out of the volume's light,
+    // and the near field gathers it back from the sun's RSM: the difference it makes on the
+    // wall's side is the single bounce from the lit ground within the reach.
+    let Some(ctx) = test_context() else { return };
+    let (mut scene, m) = sunlit_ground(Vec3::new(2.5, 0.8, 0.0));
+    let wall = (Vec3::new(-0.1, 0.0, -3.0), Vec3::new(0.1, 3.0, 3.0));
+    scene.add_mesh(
+        lightlab_scene::builtin::geom::aabb_box("wall", wall.0, wall.1, m),
+        glam::Mat4::IDENTITY,
+    );
+    let size = 64u32;
+    let (on, r) = sunlit_indirect(&ctx, &scene, size, lightlab_gpu::lpv::DEFAULT_NEAR_FIELD);
+    let radius = r.lpv().unwrap().near_occlusion_radius();
+    let (off, _) = sunlit_indirect(&ctx, &scene, size, 0);
+    assert!(radius > 0.5, "{radius}");
+    let lum = lightlab_core::color::luminance;
+    let pixels = plane_pixels(&scene, size, 0.1, 0.15..1.5, 1.5);
+    // Indirect radiance = albedo/π · E: what the near field adds, against the single bounce
+    // from the lit ground (x > 0.1) within the reach onto the wall's side.
+    let gpu: f64 = pixels
+        .iter()
+        .map(|&(x, y, _)| (lum(on.get(x, y)) - lum(off.get(x, y))) as f64)
+        .sum();
+    let cpu: f64 = pixels
+        .iter()
+        .map(|&(_, _, p)| (0.5 / std::f32::consts::PI * ground_bounce(p, 0.1, radius)) as f64)
+        .sum();
+    let (ratio, count) = (gpu / cpu, pixels.len());
     eprintln!(
         "reach {radius:.2} m: {count} wall pixels, near field {:.4} against the single bounce {:.4} \
          ({ratio:.3})",

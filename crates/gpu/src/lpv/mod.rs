@@ -24,6 +24,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use glam::camera::rh::proj::directx;
 use glam::camera::rh::view::look_to_mat4;
+use lightlab_core::color::luminance;
 use lightlab_core::lpv::{self, Grid};
 use lightlab_scene::{LightKind, Scene};
 use wgpu::util::DeviceExt;
@@ -474,6 +475,23 @@ pub fn rsm_lights(
     out
 }
 
+/// `near`'s share of the irradiance that the directional views among `lights` (the scene's
+/// directional lights, the environment's sun, the sky's cells) give an open surface facing up:
+/// how much of the light the volume holds the near field's light brings, as it lights the
+/// ground and what stands on it. On thin translucent surfaces the near field takes the place of
+/// that share of the volume's light (ambient_lpv.wgsl, docs/lpv.md). Point, spot and area
+/// lights do not count: on leaves their light is kept at 1 − the share. 1 where no view
+/// lights an upward surface.
+pub fn near_field_share<'a>(near: &RsmLight, lights: impl Iterator<Item = &'a RsmLight>) -> f32 {
+    let up = |l: &RsmLight| luminance(Vec3::from(l.color)) * (-l.axis[1]).max(0.0);
+    let total: f32 = lights.filter(|l| l.kind == 0).map(up).sum();
+    if total > 0.0 {
+        (up(near) / total).clamp(0.0, 1.0)
+    } else {
+        1.0
+    }
+}
+
 /// A directional light travelling along `d` with irradiance `colour` on a surface facing it:
 /// an orthographic view over the sphere (centre, radius), and its flux bound.
 fn directional_view(
@@ -582,6 +600,7 @@ pub struct Lpv {
     /// report's composite reads as its shadow map ([`Lpv::composite_light`]).
     composite_light: Option<RsmLight>,
     near_field_light: Option<RsmLight>,
+    near_field_share: f32,
     rsm_pipeline: wgpu::RenderPipeline,
     rsm_group: wgpu::BindGroup,
     rsm_views: Vec<wgpu::TextureView>,
@@ -658,6 +677,9 @@ impl Lpv {
             .last()
             .filter(|l| l.0.kind == 0 && l.0.sky == 0 && settings.scheme == LpvScheme::Kaplanyan)
             .map(|l| l.0);
+        let near_field_share = near_field_light.as_ref().map_or(0.0, |near| {
+            near_field_share(near, lights.iter().map(|l| &l.0))
+        });
         let uniform_bytes = setup::uniform_slots(&settings, &grids, bound, wind);
         let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lpv uniforms"),
@@ -700,6 +722,7 @@ impl Lpv {
             light_sizes,
             composite_light,
             near_field_light,
+            near_field_share,
             rsm_pipeline,
             rsm_group,
             rsm_views,
@@ -780,6 +803,12 @@ impl Lpv {
     /// texels ([`LpvSettings::near_field`]).
     pub fn near_field_light(&self) -> Option<&RsmLight> {
         self.near_field_light.as_ref()
+    }
+
+    /// The near field's light's share of the volume's directional light
+    /// ([`near_field_share`]); 0 without a near field.
+    pub fn near_field_share(&self) -> f32 {
+        self.near_field_share
     }
 
     /// The finest cascade's geometry volume (blocking SH at 2i, albedo sums at 2i + 1, per
@@ -990,6 +1019,36 @@ mod tests {
         let sizes: Vec<u32> = [4, 8, 16, 32, 48, 64, 256].map(rsm_size_for_grid).to_vec();
         assert_eq!(sizes, [256, 256, 512, 1024, 2048, 2048, 2048]);
         assert!(LpvSettings::default().rsm_size <= rsm_size_for_grid(32));
+    }
+
+    #[test]
+    fn the_near_fields_share_is_its_light_on_an_upward_surface_over_all_directional_light() {
+        let view = |kind: u32, d: Vec3, e: f32, sky: u32| RsmLight {
+            kind,
+            axis: d.normalize().to_array(),
+            color: [e; 3],
+            sky,
+            ..Default::default()
+        };
+        let sun = view(0, Vec3::new(0.0, -1.0, 1.0), 4.0, 0);
+        let lights = [
+            view(0, Vec3::NEG_Y, 1.0, 1),
+            view(0, Vec3::new(1.0, -1.0, 0.0), 2.0, 1),
+            // Below the horizon, or not directional: no part of it.
+            view(0, Vec3::Y, 5.0, 1),
+            view(1, Vec3::NEG_Y, 7.0, 0),
+            sun,
+        ];
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        let expected = 4.0 * h / (1.0 + 2.0 * h + 4.0 * h);
+        let share = near_field_share(&sun, lights.iter());
+        assert!(
+            (share - expected).abs() < 1e-5,
+            "{share} against {expected}"
+        );
+        assert_eq!(near_field_share(&sun, [sun].iter()), 1.0);
+        let below = view(0, Vec3::Y, 1.0, 0);
+        assert_eq!(near_field_share(&below, [below].iter()), 1.0);
     }
 
     #[test]

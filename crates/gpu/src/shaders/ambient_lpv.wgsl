@@ -268,24 +268,50 @@ fn source_vertex(p: vec3<f32>, vi: u32, ii: u32) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 
+// A thin translucent surface (foliage; diffuse transmission t): 1 − t of the light arriving
+// on the front is reflected, t of the light arriving on the back leaves through the front.
+// Within a canopy the volume's 2-band light holds the neighbouring leaves' light, finer than
+// its cells, the geometry volume's or the sky maps resolve, so near occlusion cannot take it
+// out, and the near field gathered on top of it counted it twice (bush 1.15× `direct`). Here
+// the near field takes the place of its light's share σ of the volume's light
+// (`near_share`, `Lpv::near_field_share`: the sun's share of what the volume's directional
+// sources give an open upward surface), on both sides, and the volume keeps 1 − σ, the
+// sky's bounce: a bright sky lights the canopy's inside mostly by its bounce, which the
+// sun's RSM does not carry. The glossy lobe's hidden directions reflect the same mix, the
+// near field as its irradiance over π from every direction (docs/lpv.md, *What limits bush*).
+fn leaf_radiance(s: Surface, in: VertexOut, glossy: vec3<f32>) -> vec3<f32> {
+    let radius = lpv_u.occlusion_radius;
+    let front = rsm_near_field(s.p, s.n, radius, in.clip.xy);
+    let back = rsm_near_field(s.p, -s.n, radius, in.clip.xy);
+    let kv = 1.0 - select(0.0, lpv_u.near_share, lpv_u.near_samples > 0u);
+    let l = vec4<f32>(front / (PI * 0.2820948), 0.0);
+    let v = lpv_surroundings(s.p, s.n);
+    let around = Surroundings(
+        vec4<f32>(l.x, 0.0, 0.0, 0.0) + kv * v.r,
+        vec4<f32>(l.y, 0.0, 0.0, 0.0) + kv * v.g,
+        vec4<f32>(l.z, 0.0, 0.0, 0.0) + kv * v.b,
+    );
+    let sky_t = sky_terms(s, radius, env_occlusion_lobe(s), around);
+    let volume = (1.0 - s.transmission) * lpv_irradiance(s.p, s.n) * sky_t.far
+        + s.transmission * lpv_irradiance(s.p, -s.n) * sky_t.far_back;
+    let e = (1.0 - s.transmission) * front + s.transmission * back + kv * volume;
+    let indirect = s.diffuse / PI * e;
+    if lpv_u.indirect_only == 1u {
+        return indirect;
+    }
+    return indirect + sky_light(s, sky_t) + glossy * sky_t.spec + emission(in);
+}
+
 // Only the volume's indirect light in the indirect-only view.
 fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>, glossy: vec3<f32>) -> vec3<f32> {
     if lpv_u.mode == 2u && lpv_u.sun_dir.w > 0.5 && lpv_u.indirect_only == 0u {
         return wpi_composite(s) + glossy + emission(in);
     }
-    // The sky's visibility and the shares of the hemispheres the volume's light comes from
-    // (the surfaces beyond the lookup's reach), in one pass.
-    let sky_t = sky_terms(s, lpv_u.occlusion_radius, env_occlusion_lobe(s), lpv_surroundings(s.p, s.n));
-    var e = lpv_irradiance(s.p, s.n) * sky_t.far;
     if s.transmission > 0.0 {
-        // Thin foliage (diffuse transmission t): 1 − t of the light arriving on the front is
-        // reflected, t of the light arriving on the back leaves through the front. No near
-        // field: within a canopy the leaves between are finer than the geometry volume's
-        // cells, and the gathered light over-lit the bush's leaves (docs/lpv.md).
-        e = (1.0 - s.transmission) * e + s.transmission * lpv_irradiance(s.p, -s.n) * sky_t.far_back;
-    } else {
-        e += rsm_near_field(s.p, s.n, lpv_u.occlusion_radius, in.clip.xy);
+        return leaf_radiance(s, in, glossy);
     }
+    let sky_t = sky_terms(s, lpv_u.occlusion_radius, env_occlusion_lobe(s), lpv_surroundings(s.p, s.n));
+    let e = lpv_irradiance(s.p, s.n) * sky_t.far + rsm_near_field(s.p, s.n, lpv_u.occlusion_radius, in.clip.xy);
     let indirect = s.diffuse / PI * e;
     if lpv_u.indirect_only == 1u {
         return indirect;

@@ -74,7 +74,8 @@ struct LpvAmbientUniforms {
     occlusion_radius: f32,
     // The near field gathered from the last light's RSM: samples per pixel (0: off).
     near_samples: u32,
-    pad2: u32,
+    // Its light's share of the volume's light, which it replaces on thin translucent surfaces.
+    near_share: f32,
     grids: array<vec4<f32>, 4>,
     // lpv-faithful's composite (App. B): the sun's direction of travel (w = 1: on), its
     // irradiance (w: shadow bias in RSM depth); the view-projection of the RSM it or the near

@@ -59,6 +59,7 @@ impl LpvSource {
             && sky.directions() > 0
         {
             u.near_samples = volume.settings.near_field;
+            u.near_share = volume.near_field_share();
             u.near = [l.axis[0], l.axis[1], l.axis[2], l.texel.sqrt()];
             u.rsm_view_proj = l.view_proj;
         }
