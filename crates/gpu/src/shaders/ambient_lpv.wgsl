@@ -136,7 +136,13 @@ fn near_transmittance(p: vec3<f32>, x: vec3<f32>, l: vec3<f32>) -> f32 {
     return t;
 }
 
-// The irradiance on n at p from the surfaces the RSM's light lights within `radius` of p:
+// The near field's irradiance around n (front) and, when asked, around −n (back).
+struct NearField {
+    front: vec3<f32>,
+    back: vec3<f32>,
+}
+
+// The irradiance on n (and −n when `two_sided`) at p from the surfaces the RSM's light lights within `radius` of p:
 // `near_samples` texels on a spiral over the disc of that radius around p's texel, at radii
 // spaced evenly (density ∝ 1/r, which the 1/d² fall-off favours), each standing for its share
 // of the disc's texels (2π·r·R/N). The spiral turns and shifts over each 2 × 2 pixels (Keller &
@@ -147,8 +153,8 @@ fn near_transmittance(p: vec3<f32>, x: vec3<f32>, l: vec3<f32>) -> f32 {
 // surface area A = A⊥/|n_p·l_light|; its irradiance at distance d, Φ·cos_p·cos / (π d² + A),
 // is the disc formula, bounded where d is small. Texels within a texel's side of p (its own
 // surface) and beyond the radius are skipped.
-fn rsm_near_field(p: vec3<f32>, n: vec3<f32>, radius: f32, pixel: vec2<f32>) -> vec3<f32> {
-    var e = vec3<f32>(0.0);
+fn rsm_near_field(p: vec3<f32>, n: vec3<f32>, radius: f32, pixel: vec2<f32>, two_sided: bool) -> NearField {
+    var e = NearField(vec3<f32>(0.0), vec3<f32>(0.0));
     let count = lpv_u.near_samples;
     if count == 0u || radius <= 0.0 {
         return e;
@@ -177,7 +183,7 @@ fn rsm_near_field(p: vec3<f32>, n: vec3<f32>, radius: f32, pixel: vec2<f32>) -> 
         }
         let l = d * inverseSqrt(d2);
         let cos_r = dot(n, l);
-        if cos_r <= 0.0 {
+        if cos_r <= 0.0 && !two_sided {
             continue;
         }
         let np = textureLoad(rsm_normal, t, 0);
@@ -185,7 +191,9 @@ fn rsm_near_field(p: vec3<f32>, n: vec3<f32>, radius: f32, pixel: vec2<f32>) -> 
         let emit = (1.0 - np.w) * max(cp, 0.0) + np.w * max(-cp, 0.0);
         let area = q.w * share / max(abs(dot(np.xyz, lpv_u.near.xyz)), 0.25);
         let phi = textureLoad(rsm_flux, t, 0).rgb * share;
-        e += phi * (emit * cos_r / (PI * d2 + area)) * near_transmittance(p, q.xyz, l);
+        let g = phi * (emit * abs(cos_r) / (PI * d2 + area)) * near_transmittance(p, q.xyz, l);
+        e.front += select(vec3<f32>(0.0), g, cos_r > 0.0);
+        e.back += select(g, vec3<f32>(0.0), cos_r > 0.0);
     }
     return e;
 }
@@ -281,8 +289,9 @@ fn source_vertex(p: vec3<f32>, vi: u32, ii: u32) -> vec3<f32> {
 // near field as its irradiance over π from every direction (docs/lpv.md, *What limits bush*).
 fn leaf_radiance(s: Surface, in: VertexOut, glossy: vec3<f32>) -> vec3<f32> {
     let radius = lpv_u.occlusion_radius;
-    let front = rsm_near_field(s.p, s.n, radius, in.clip.xy);
-    let back = rsm_near_field(s.p, -s.n, radius, in.clip.xy);
+    let near = rsm_near_field(s.p, s.n, radius, in.clip.xy, true);
+    let front = near.front;
+    let back = near.back;
     let kv = 1.0 - select(0.0, lpv_u.near_share, lpv_u.near_samples > 0u);
     let l = vec4<f32>(front / (PI * 0.2820948), 0.0);
     let v = lpv_surroundings(s.p, s.n);
@@ -311,7 +320,7 @@ fn source_radiance(s: Surface, in: VertexOut, nv: vec3<f32>, glossy: vec3<f32>) 
         return leaf_radiance(s, in, glossy);
     }
     let sky_t = sky_terms(s, lpv_u.occlusion_radius, env_occlusion_lobe(s), lpv_surroundings(s.p, s.n));
-    let e = lpv_irradiance(s.p, s.n) * sky_t.far + rsm_near_field(s.p, s.n, lpv_u.occlusion_radius, in.clip.xy);
+    let e = lpv_irradiance(s.p, s.n) * sky_t.far + rsm_near_field(s.p, s.n, lpv_u.occlusion_radius, in.clip.xy, false).front;
     let indirect = s.diffuse / PI * e;
     if lpv_u.indirect_only == 1u {
         return indirect;
