@@ -142,7 +142,8 @@ struct NearField {
     back: vec3<f32>,
 }
 
-// The irradiance on n (and −n when `two_sided`) at p from the surfaces the RSM's light lights within `radius` of p:
+// The irradiance on n (and on −n when `two_sided`) at p from the surfaces the RSM's light
+// lights within `radius` of p:
 // `near_samples` texels on a spiral over the disc of that radius around p's texel, at radii
 // spaced evenly (density ∝ 1/r, which the 1/d² fall-off favours), each standing for its share
 // of the disc's texels (2π·r·R/N). The spiral turns and shifts over each 2 × 2 pixels (Keller &
@@ -293,12 +294,13 @@ fn leaf_radiance(s: Surface, in: VertexOut, glossy: vec3<f32>) -> vec3<f32> {
     let front = near.front;
     let back = near.back;
     let kv = 1.0 - select(0.0, lpv_u.near_share, lpv_u.near_samples > 0u);
-    let l = vec4<f32>(front / (PI * 0.2820948), 0.0);
+    // The near field as uniform radiance E/π: its 2-band SH is (E/π)/Y00 in the first band.
+    let l = front / (PI * 0.2820948);
     let v = lpv_surroundings(s.p, s.n);
     let around = Surroundings(
-        vec4<f32>(l.x, 0.0, 0.0, 0.0) + kv * v.r,
-        vec4<f32>(l.y, 0.0, 0.0, 0.0) + kv * v.g,
-        vec4<f32>(l.z, 0.0, 0.0, 0.0) + kv * v.b,
+        vec4<f32>(l.r, 0.0, 0.0, 0.0) + kv * v.r,
+        vec4<f32>(l.g, 0.0, 0.0, 0.0) + kv * v.g,
+        vec4<f32>(l.b, 0.0, 0.0, 0.0) + kv * v.b,
     );
     let sky_t = sky_terms(s, radius, env_occlusion_lobe(s), around);
     let volume = (1.0 - s.transmission) * lpv_irradiance(s.p, s.n) * sky_t.far

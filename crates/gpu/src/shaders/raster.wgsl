@@ -451,7 +451,10 @@ fn shadow_map_visibility(li: GpuLight, p: vec3<f32>, ng: vec3<f32>) -> f32 {
     var sum = 0.0;
     var count = 0.0;
     if frame.shadow_mode == 1u {
-        let grad = receiver_plane(sv, q, nl, uv, ndc.z, texel);
+        var grad = vec2<f32>(0.0);
+        if r > 0 {
+            grad = receiver_plane(sv, q, nl, uv, ndc.z, texel);
+        }
         for (var y = -r; y <= r; y++) {
             for (var x = -r; x <= r; x++) {
                 let o = vec2<f32>(f32(x), f32(y)) * inv;
