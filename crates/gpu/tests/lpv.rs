@@ -1150,10 +1150,7 @@ fn a_leaf_gets_the_suns_bounce_once_from_the_near_field_in_place_of_the_volume()
         .iter()
         .map(|&(x, y, _)| lightlab_core::color::luminance(img.get(x, y)) as f64)
         .sum();
-    let cpu: f64 = pixels
-        .iter()
-        .map(|&(_, _, p)| (0.5 / std::f32::consts::PI * ground_bounce(p, 0.0, radius)) as f64)
-        .sum();
+    let cpu = bounce_radiance_sum(&pixels, 0.0, radius);
     let (ratio, count) = (gpu / cpu, pixels.len());
     eprintln!(
         "reach {radius:.2} m, share {share:.3}: {count} sheet pixels, indirect light {:.4} \
@@ -1189,6 +1186,15 @@ fn ground_bounce(p: Vec3, x0: f32, radius: f32) -> f32 {
     e
 }
 
+/// The radiance of a grey (albedo ½) surface facing +x at each pixel's point lit by
+/// [`ground_bounce`], summed over the pixels.
+fn bounce_radiance_sum(pixels: &[(u32, u32, Vec3)], x0: f32, radius: f32) -> f64 {
+    pixels
+        .iter()
+        .map(|&(_, _, p)| (0.5 / std::f32::consts::PI * ground_bounce(p, x0, radius)) as f64)
+        .sum()
+}
+
 #[test]
 fn the_near_field_lights_a_wall_from_the_sunlit_ground_beside_it() {
     // A 3 m wall on the sunlit ground. The wall's side gets no sun; the ground by it lights
@@ -1215,10 +1221,7 @@ fn the_near_field_lights_a_wall_from_the_sunlit_ground_beside_it() {
         .iter()
         .map(|&(x, y, _)| (lum(on.get(x, y)) - lum(off.get(x, y))) as f64)
         .sum();
-    let cpu: f64 = pixels
-        .iter()
-        .map(|&(_, _, p)| (0.5 / std::f32::consts::PI * ground_bounce(p, 0.1, radius)) as f64)
-        .sum();
+    let cpu = bounce_radiance_sum(&pixels, 0.1, radius);
     let (ratio, count) = (gpu / cpu, pixels.len());
     eprintln!(
         "reach {radius:.2} m: {count} wall pixels, near field {:.4} against the single bounce {:.4} \
